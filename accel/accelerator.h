@@ -1,0 +1,86 @@
+#pragma once
+// The one accelerator interface. Dispatch is virtual per batch (a span of
+// rays); every implementation runs a tight non-virtual loop inside.
+//
+// Contract:
+//  - build() may be called once; the mesh must outlive the accelerator.
+//  - intersect()/occluded() are const and thread-safe: callers may trace
+//    disjoint sub-spans from several threads at once.
+//  - Invalid rays (see ray_is_valid) report a miss / not occluded.
+//  - When `stats` is non-null the instrumented kernel runs and adds its
+//    per-ray counters to *stats (the uninstrumented kernel does no counting).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "accel/core/hit.h"
+#include "accel/core/ray.h"
+#include "accel/core/triangle_mesh.h"
+
+namespace raylab {
+
+// Figures every structure reports after a build. Fields that do not apply
+// stay at their defaults (0, or NaN for sah_cost).
+struct BuildStats {
+  double build_ms = 0.0;
+  size_t bytes = 0;       // memory held by the structure (excluding the caller's mesh)
+  size_t nodes = 0;       // nodes, or cells for grids
+  size_t leaves = 0;      // leaves, or non-empty cells
+  int max_depth = 0;
+  double avg_depth = 0.0;  // mean leaf depth
+  double sah_cost = std::numeric_limits<double>::quiet_NaN();
+  // Structure-specific figures (references per triangle, empty fraction, ...).
+  std::map<std::string, double> extra;
+};
+
+// Per-ray traversal counters accumulated by the instrumented kernels.
+struct TraversalStats {
+  uint64_t rays = 0;
+  uint64_t nodes_visited = 0;   // inner + leaf nodes, or grid cells
+  uint64_t triangle_tests = 0;
+
+  TraversalStats& operator+=(const TraversalStats& o) {
+    rays += o.rays;
+    nodes_visited += o.nodes_visited;
+    triangle_tests += o.triangle_tests;
+    return *this;
+  }
+};
+
+class Accelerator {
+ public:
+  virtual ~Accelerator() = default;
+
+  // The spec string this accelerator was created from, e.g. "bvh:leaf=4".
+  const std::string& spec() const { return spec_; }
+  void set_spec(std::string s) { spec_ = std::move(s); }
+
+  virtual BuildStats build(const TriangleMesh& mesh) = 0;
+
+  // Closest hit for every ray: hits[i] receives the result of rays[i].
+  virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits,
+                         TraversalStats* stats = nullptr) const = 0;
+
+  // Any hit within [tmin, tmax]: occluded[i] = 1 when rays[i] hits something.
+  virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                        TraversalStats* stats = nullptr) const = 0;
+
+  // Convenience single-ray queries (not for hot loops).
+  Hit intersect1(const Ray& r) const {
+    Hit h;
+    intersect(std::span<const Ray>(&r, 1), std::span<Hit>(&h, 1));
+    return h;
+  }
+  bool occluded1(const Ray& r) const {
+    uint8_t o = 0;
+    occluded(std::span<const Ray>(&r, 1), std::span<uint8_t>(&o, 1));
+    return o != 0;
+  }
+
+ private:
+  std::string spec_;
+};
+
+}  // namespace raylab

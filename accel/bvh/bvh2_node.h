@@ -1,0 +1,53 @@
+#pragma once
+// Binary BVH layout: compact 32-byte nodes in one flat array. The two children
+// of an inner node are stored side by side (left at `index`, right at
+// `index + 1`), so a node needs no second child pointer.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "accel/core/aabb.h"
+
+namespace raylab {
+
+struct alignas(32) Bvh2Node {
+  float lo[3];
+  uint32_t index;  // inner: index of the left child; leaf: first entry in prim_ids
+  float hi[3];
+  uint32_t count;  // 0 for an inner node; number of primitives for a leaf
+
+  bool is_leaf() const { return count != 0; }
+  Aabb bounds() const { return Aabb(Vec3f(lo[0], lo[1], lo[2]), Vec3f(hi[0], hi[1], hi[2])); }
+  void set_bounds(const Aabb& b) {
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = b.lo[i];
+      hi[i] = b.hi[i];
+    }
+  }
+};
+static_assert(sizeof(Bvh2Node) == 32, "Bvh2Node must stay 32 bytes");
+
+// The canonical binary tree every builder produces: node 0 is the root; leaves
+// refer to ranges of prim_ids. Other layouts are converted from it.
+struct BinaryBvh {
+  std::vector<Bvh2Node> nodes;
+  std::vector<uint32_t> prim_ids;
+};
+
+// Cost constants of the surface area heuristic used to *report* tree quality,
+// identical for every builder so costs are comparable: C_t = 1 per inner node
+// visited, C_i = 1 per primitive tested, normalised by the root's area.
+inline constexpr double kSahTraversalCost = 1.0;
+inline constexpr double kSahIntersectionCost = 1.0;
+
+struct TreeShape {
+  size_t nodes = 0, leaves = 0;
+  int max_depth = 0;
+  double avg_leaf_depth = 0.0;
+  double sah_cost = 0.0;
+};
+
+// Walks the tree once: node/leaf counts, depths and SAH cost.
+TreeShape measure_tree(std::span<const Bvh2Node> nodes);
+
+}  // namespace raylab

@@ -1,0 +1,109 @@
+#pragma once
+// Front-to-back traversal of a binary BVH with an explicit stack. Both
+// children's boxes are tested (conservative slab test, Ize 2013); the nearer
+// one is visited first and the farther one pushed with its entry distance, so
+// it can be skipped when a closer hit has been found by the time it is popped.
+// Closest hit and any hit are the same routine (kAnyHit); counting is a
+// compile-time switch (kCount), so the uninstrumented kernel pays nothing.
+#include <cstdint>
+
+#include "accel/accelerator.h"
+#include "accel/bvh/bvh2_node.h"
+#include "accel/core/intersect_triangle.h"
+#include "accel/core/slab_test.h"
+
+namespace raylab {
+
+// Triangle vertices copied in leaf order, next to their original ids, so a
+// leaf's triangles are contiguous in memory.
+struct LeafTriangle {
+  Vec3f p0, p1, p2;
+  uint32_t prim;
+};
+
+struct Bvh2View {
+  const Bvh2Node* nodes = nullptr;
+  const LeafTriangle* tris = nullptr;  // indexed like BinaryBvh::prim_ids
+  bool empty = true;
+};
+
+// Stack depth needed: the builder bounds tree depth (median fallback beyond
+// depth 96), and only far children are pushed.
+inline constexpr int kBvh2StackSize = 192;
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
+  Hit hit;
+  if constexpr (kCount) stats->rays++;
+  if (bvh.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
+
+  const SlabRay sr(ray);
+  const TrianglePrecompute<kTest> pre(ray);
+  const float tmin = ray.tmin;
+  float tmax = ray.tmax;
+
+  struct Entry {
+    uint32_t node;
+    float t;
+  };
+  Entry stack[kBvh2StackSize];
+  int sp = 0;
+
+  float t_root;
+  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, tmax, t_root)) return hit;
+  uint32_t node = 0;
+
+  while (true) {
+    const Bvh2Node& n = bvh.nodes[node];
+    if constexpr (kCount) stats->nodes_visited++;
+    if (n.count != 0) {
+      const LeafTriangle* tri = bvh.tris + n.index;
+      for (uint32_t i = 0; i < n.count; ++i, ++tri) {
+        if constexpr (kCount) stats->triangle_tests++;
+        float t, u, v;
+        if (pre.intersect(ray, tri->p0, tri->p1, tri->p2, tmin, tmax, t, u, v)) {
+          if (t < tmax || !hit.valid()) {
+            hit = Hit{t, u, v, tri->prim};
+            tmax = t;
+            if constexpr (kAnyHit) return hit;
+          }
+        }
+      }
+    } else {
+      const Bvh2Node& l = bvh.nodes[n.index];
+      const Bvh2Node& r = bvh.nodes[n.index + 1];
+      float tl, tr;
+      const bool hl = slab_test(sr, l.lo, l.hi, tmin, tmax, tl);
+      const bool hr = slab_test(sr, r.lo, r.hi, tmin, tmax, tr);
+      if (hl && hr) {
+        uint32_t near = n.index, far = n.index + 1;
+        if (tr < tl) {
+          std::swap(near, far);
+          std::swap(tl, tr);
+        }
+        stack[sp++] = Entry{far, tr};
+        node = near;
+        continue;
+      }
+      if (hl) {
+        node = n.index;
+        continue;
+      }
+      if (hr) {
+        node = n.index + 1;
+        continue;
+      }
+    }
+    // Pop the next subtree that can still hold a closer hit.
+    while (true) {
+      if (sp == 0) return hit;
+      const Entry e = stack[--sp];
+      if (e.t <= tmax) {
+        node = e.node;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace raylab

@@ -1,0 +1,144 @@
+#pragma once
+// Ray-triangle intersection kernels.
+//
+// The default everywhere is the watertight test of Woop, Benthin & Wald,
+// "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013: the ray is sheared
+// so that it points along +z of a permuted frame, and the 2D edge functions of
+// the projected triangle decide the hit. A shared edge yields edge functions of
+// exactly opposite sign in its two triangles, so a ray can never slip between
+// them. That holds only if a*b - c*d is evaluated without fused multiply-adds:
+// the project compiles with -ffp-contract=off for this reason. When an edge
+// function is exactly zero the three are recomputed in double precision, as
+// the paper prescribes, so hits on edges and vertices are decided consistently.
+//
+// Moller-Trumbore (1997) is kept for the accuracy study (spec option tri=mt).
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "accel/core/ray.h"
+#include "accel/core/vec.h"
+
+namespace raylab {
+
+enum class TriangleTest : uint8_t { Watertight, MollerTrumbore };
+
+const char* triangle_test_name(TriangleTest t);
+
+// Per-ray constants of the watertight test, computed once per ray.
+struct WatertightRay {
+  Vec3f org;
+  int kx = 0, ky = 1, kz = 2;
+  float sx = 0.0f, sy = 0.0f, sz = 1.0f;
+
+  WatertightRay() = default;
+  explicit WatertightRay(const Ray& r) : org(r.org) {
+    const Vec3f ad = r.dir.cwiseAbs();
+    kz = (ad.x() >= ad.y()) ? (ad.x() >= ad.z() ? 0 : 2) : (ad.y() >= ad.z() ? 1 : 2);
+    kx = (kz + 1) % 3;
+    ky = (kx + 1) % 3;
+    // Keep the winding of the projected triangle: swap when looking down -z.
+    if (r.dir[kz] < 0.0f) std::swap(kx, ky);
+    sx = r.dir[kx] / r.dir[kz];
+    sy = r.dir[ky] / r.dir[kz];
+    sz = 1.0f / r.dir[kz];
+  }
+};
+
+// Watertight test. On a hit with tmin <= t <= tmax writes t, u, v and returns true.
+inline bool intersect_watertight(const WatertightRay& w, const Vec3f& p0, const Vec3f& p1,
+                                 const Vec3f& p2, float tmin, float tmax, float& t_out,
+                                 float& u_out, float& v_out) {
+  const Vec3f a = p0 - w.org;
+  const Vec3f b = p1 - w.org;
+  const Vec3f c = p2 - w.org;
+  const float ax = a[w.kx] - w.sx * a[w.kz];
+  const float ay = a[w.ky] - w.sy * a[w.kz];
+  const float bx = b[w.kx] - w.sx * b[w.kz];
+  const float by = b[w.ky] - w.sy * b[w.kz];
+  const float cx = c[w.kx] - w.sx * c[w.kz];
+  const float cy = c[w.ky] - w.sy * c[w.kz];
+
+  // Edge functions: U is the weight of p0 (edge p1-p2), V of p1, W of p2.
+  float u = cx * by - cy * bx;
+  float v = ax * cy - ay * cx;
+  float wgt = bx * ay - by * ax;
+  if (u == 0.0f || v == 0.0f || wgt == 0.0f) {
+    u = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
+    v = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
+    wgt = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+  }
+  if ((u < 0.0f || v < 0.0f || wgt < 0.0f) && (u > 0.0f || v > 0.0f || wgt > 0.0f)) return false;
+  const float det = u + v + wgt;
+  if (det == 0.0f) return false;
+
+  const float az = w.sz * a[w.kz];
+  const float bz = w.sz * b[w.kz];
+  const float cz = w.sz * c[w.kz];
+  const float tt = u * az + v * bz + wgt * cz;
+  const float inv_det = 1.0f / det;
+  const float t = tt * inv_det;
+  // Also rejects NaN t (degenerate input) because the comparisons fail.
+  if (!(t >= tmin && t <= tmax)) return false;
+  t_out = t;
+  u_out = v * inv_det;
+  v_out = wgt * inv_det;
+  return true;
+}
+
+// Moller & Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection", 1997.
+// Not watertight: rays through shared edges can pass between triangles.
+inline bool intersect_moller_trumbore(const Ray& r, const Vec3f& p0, const Vec3f& p1,
+                                      const Vec3f& p2, float tmin, float tmax, float& t_out,
+                                      float& u_out, float& v_out) {
+  const Vec3f e1 = p1 - p0;
+  const Vec3f e2 = p2 - p0;
+  const Vec3f pv = r.dir.cross(e2);
+  const float det = e1.dot(pv);
+  if (det == 0.0f) return false;
+  const float inv_det = 1.0f / det;
+  const Vec3f s = r.org - p0;
+  const float u = s.dot(pv) * inv_det;
+  if (!(u >= 0.0f && u <= 1.0f)) return false;
+  const Vec3f q = s.cross(e1);
+  const float v = r.dir.dot(q) * inv_det;
+  if (!(v >= 0.0f && u + v <= 1.0f)) return false;
+  const float t = e2.dot(q) * inv_det;
+  if (!(t >= tmin && t <= tmax)) return false;
+  t_out = t;
+  u_out = u;
+  v_out = v;
+  return true;
+}
+
+// Per-ray data for either test, so kernels can be templated on the test.
+template <TriangleTest kTest>
+struct TrianglePrecompute;
+
+template <>
+struct TrianglePrecompute<TriangleTest::Watertight> {
+  WatertightRay w;
+  explicit TrianglePrecompute(const Ray& r) : w(r) {}
+  bool intersect(const Ray&, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, float tmin,
+                 float tmax, float& t, float& u, float& v) const {
+    return intersect_watertight(w, p0, p1, p2, tmin, tmax, t, u, v);
+  }
+};
+
+template <>
+struct TrianglePrecompute<TriangleTest::MollerTrumbore> {
+  explicit TrianglePrecompute(const Ray&) {}
+  bool intersect(const Ray& r, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, float tmin,
+                 float tmax, float& t, float& u, float& v) const {
+    return intersect_moller_trumbore(r, p0, p1, p2, tmin, tmax, t, u, v);
+  }
+};
+
+// Calls f.template operator()<kTest>() with the runtime choice as a template argument.
+template <typename F>
+decltype(auto) dispatch_triangle_test(TriangleTest t, F&& f) {
+  if (t == TriangleTest::MollerTrumbore) return f.template operator()<TriangleTest::MollerTrumbore>();
+  return f.template operator()<TriangleTest::Watertight>();
+}
+
+}  // namespace raylab

@@ -1,0 +1,30 @@
+#pragma once
+// The one ray type used by every accelerator, the tracer and the benchmarks.
+#include <limits>
+
+#include "accel/core/vec.h"
+
+namespace raylab {
+
+// A ray segment: points org + t * dir for t in [tmin, tmax].
+// dir need not be normalised; t is measured in units of |dir|.
+struct Ray {
+  Vec3f org = Vec3f::Zero();
+  float tmin = 0.0f;
+  Vec3f dir = Vec3f::UnitZ();
+  float tmax = std::numeric_limits<float>::infinity();
+
+  Ray() = default;
+  Ray(const Vec3f& o, const Vec3f& d, float t0 = 0.0f,
+      float t1 = std::numeric_limits<float>::infinity())
+      : org(o), tmin(t0), dir(d), tmax(t1) {}
+
+  Vec3f at(float t) const { return org + t * dir; }
+};
+
+// True when a ray can be traced: finite origin, finite non-zero direction,
+// tmin not NaN, tmax not NaN. Accelerators treat invalid rays as misses;
+// the command line rejects them before tracing.
+bool ray_is_valid(const Ray& r);
+
+}  // namespace raylab

@@ -1,0 +1,76 @@
+#include "accel/registry.h"
+
+#include <fmt/format.h>
+
+#include "accel/brute/brute_accel.h"
+#include "accel/bvh/bvh_accel.h"
+#include "accel/embree/embree_accel.h"
+
+namespace raylab {
+
+const std::vector<AcceleratorInfo>& accelerator_registry() {
+  // One line per structure; order is the order of `all` and of reports.
+  static const std::vector<AcceleratorInfo> registry = {
+      embree_accelerator_info(),
+      brute_accelerator_info(),
+      bvh_accelerator_info(),
+  };
+  return registry;
+}
+
+namespace {
+
+const AcceleratorInfo* find_info(const std::string& name) {
+  for (const auto& info : accelerator_registry())
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+std::string known_names() {
+  std::string s;
+  for (const auto& info : accelerator_registry()) s += (s.empty() ? "" : ", ") + info.name;
+  return s;
+}
+
+}  // namespace
+
+std::unique_ptr<Accelerator> make_accelerator(const std::string& text) {
+  const Spec spec = Spec::parse(text);
+  const AcceleratorInfo* info = find_info(spec.name);
+  if (!info)
+    throw SpecError(fmt::format("unknown accelerator '{}' (available: {}, or 'all')", spec.name, known_names()));
+  const Params params(spec.name, info->params, spec.params);
+  auto accel = info->make(params);
+  accel->set_spec(spec.to_string());
+  return accel;
+}
+
+std::vector<std::string> expand_accelerator_list(const std::string& list) {
+  std::vector<std::string> out;
+  for (const auto& item : split_spec_list(list)) {
+    if (item == "all") {
+      for (const auto& info : accelerator_registry()) out.push_back(info.name);
+      continue;
+    }
+    const Spec spec = Spec::parse(item);
+    const AcceleratorInfo* info = find_info(spec.name);
+    if (!info)
+      throw SpecError(fmt::format("unknown accelerator '{}' (available: {}, or 'all')", spec.name, known_names()));
+    Params check(spec.name, info->params, spec.params);  // rejects unknown parameters now
+    out.push_back(spec.to_string());
+  }
+  if (out.empty()) throw SpecError("no accelerator given");
+  return out;
+}
+
+std::string describe_accelerators() {
+  std::string s;
+  for (const auto& info : accelerator_registry()) {
+    s += fmt::format("{:<10} {}\n", info.name, info.help);
+    for (const auto& p : info.params)
+      s += fmt::format("    {}={:<10} {}\n", p.name, p.default_value, p.help);
+  }
+  return s;
+}
+
+}  // namespace raylab

@@ -1,0 +1,48 @@
+// raylab: render, verify and time ray-tracing acceleration structures.
+#include <cstdio>
+#include <exception>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "app/commands.h"
+
+int main(int argc, char** argv) {
+  using namespace raylab::cli;
+  CLI::App app{"raylab: a testbed for ray-tracing acceleration structures (Embree as the reference)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("raylab 0.1"));
+  std::map<CLI::App*, Runner> runners;
+  auto add = [&](Runner (*f)(CLI::App&), const char* name) {
+    Runner r = f(app);
+    runners[app.get_subcommand(name)] = std::move(r);
+  };
+  add(add_render, "render");
+  add(add_verify, "verify");
+  add(add_bench, "bench");
+  add(add_info, "info");
+  add(add_scenes, "scenes");
+  add(add_accels, "accels");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "raylab: error: %s (see raylab --help)\n", e.what());
+    return kExitBadInput;
+  }
+
+  try {
+    for (auto& [sub, run] : runners)
+      if (sub->parsed()) return run();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "raylab: error: %s\n", e.what());
+    return kExitBadInput;
+  }
+  return kExitBadInput;
+}

@@ -1,0 +1,162 @@
+#include "bench/bench_run.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "accel/registry.h"
+#include "accel/util/timer.h"
+#include "bench/ray_sets.h"
+#include "bench/trace.h"
+
+namespace raylab {
+
+nlohmann::json BenchRecord::to_json() const {
+  nlohmann::json j;
+  j["scene"] = scene;
+  j["triangles"] = triangles;
+  j["accel"] = accel;
+  j["ray_set"] = ray_set;
+  j["threads"] = threads;
+  j["rays"] = rays;
+  j["build_ms"] = build_ms;
+  j["bytes"] = bytes;
+  j["bytes_per_triangle"] = triangles ? static_cast<double>(bytes) / triangles : 0.0;
+  j["mrays_per_s"] = mrays_per_s;
+  j["mrays_min"] = mrays_min;
+  j["mrays_max"] = mrays_max;
+  j["embree_mrays_per_s"] = embree_mrays_per_s;
+  j["ratio_to_embree"] = ratio_to_embree;
+  j["embree_agreement"] = embree_agreement;
+  j["nodes_per_ray"] = nodes_per_ray;
+  j["tris_per_ray"] = tris_per_ray;
+  j["sah_cost"] = std::isfinite(sah_cost) ? nlohmann::json(sah_cost) : nlohmann::json(nullptr);
+  j["nodes"] = nodes;
+  j["leaves"] = leaves;
+  j["max_depth"] = max_depth;
+  return j;
+}
+
+namespace {
+
+double agreement(const RaySet& set, const TraceOutput& a, const TraceOutput& e) {
+  if (set.rays.empty()) return 1.0;
+  size_t same = 0;
+  for (size_t i = 0; i < set.rays.size(); ++i) {
+    if (set.occlusion) {
+      same += a.occluded[i] == e.occluded[i];
+    } else {
+      const Hit& x = a.hits[i];
+      const Hit& y = e.hits[i];
+      same += (!x.valid() && !y.valid()) ||
+              (x.valid() && y.valid() &&
+               (x.prim == y.prim || std::fabs(x.t - y.t) <= 1e-4f * std::max(std::fabs(y.t), 1e-30f)));
+    }
+  }
+  return static_cast<double>(same) / static_cast<double>(set.rays.size());
+}
+
+struct Built {
+  std::string spec;
+  std::unique_ptr<Accelerator> accel;
+  BuildStats stats;
+};
+
+Built build_accel(const std::string& spec, const Scene& scene, int repeats) {
+  Built b{spec, nullptr, {}};
+  std::vector<double> times;
+  for (int i = 0; i < std::max(1, repeats); ++i) {
+    b.accel = make_accelerator(spec);
+    b.stats = b.accel->build(scene.mesh);
+    times.push_back(b.stats.build_ms);
+  }
+  std::sort(times.begin(), times.end());
+  b.stats.build_ms = times[times.size() / 2];
+  b.spec = b.accel->spec();
+  return b;
+}
+
+}  // namespace
+
+std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
+                                   const BenchOptions& o, const BenchProgress& progress) {
+  auto say = [&](const std::string& m) {
+    if (progress) progress(m);
+  };
+  say("building embree (reference)");
+  Built embree = build_accel(o.embree_spec, scene, o.build_repeats);
+
+  RaySetOptions rso;
+  rso.width = o.width;
+  rso.height = o.height;
+  rso.random_count = o.random_rays;
+  rso.seed = o.seed;
+  const std::vector<RaySet> sets = make_ray_sets(scene, o.ray_sets, *embree.accel, rso);
+
+  // Embree's timings per (set, threads) and its answers for agreement.
+  std::vector<TraceOutput> embree_out(sets.size());
+  for (size_t s = 0; s < sets.size(); ++s) trace_set(*embree.accel, sets[s], 1, embree_out[s]);
+
+  std::vector<BenchRecord> records;
+  for (const auto& spec : accel_specs) {
+    say(fmt::format("building {}", spec));
+    Built b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+    const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
+    for (size_t s = 0; s < sets.size(); ++s) {
+      const RaySet& set = sets[s];
+      TraceOutput out;
+      trace_set(accel, set, 1, out);
+      const double agree = agreement(set, out, embree_out[s]);
+      TraversalStats ts;
+      if (o.instrumented) trace_set(accel, set, 1, out, &ts);
+      for (int threads : o.threads) {
+        say(fmt::format("tracing {} {} rays with {} ({} thread{})", set.rays.size(), set.name, b.spec, threads,
+                        threads == 1 ? "" : "s"));
+        // Embree and the accelerator timed back to back, so drift on this
+        // shared machine affects both alike.
+        const TraceTiming et = time_trace(*embree.accel, set, threads, o.repeats);
+        const TraceTiming t = (&accel == embree.accel.get()) ? et : time_trace(accel, set, threads, o.repeats);
+        BenchRecord r;
+        r.scene = scene.name;
+        r.triangles = scene.num_triangles();
+        r.accel = b.spec;
+        r.ray_set = set.name;
+        r.threads = threads;
+        r.rays = set.rays.size();
+        r.build_ms = b.stats.build_ms;
+        r.bytes = b.stats.bytes;
+        r.mrays_per_s = t.mrays_per_s(r.rays);
+        r.mrays_min = t.max_s > 0 ? r.rays / t.max_s * 1e-6 : 0;
+        r.mrays_max = t.min_s > 0 ? r.rays / t.min_s * 1e-6 : 0;
+        r.embree_mrays_per_s = et.mrays_per_s(r.rays);
+        r.ratio_to_embree = r.embree_mrays_per_s > 0 ? r.mrays_per_s / r.embree_mrays_per_s : 0;
+        r.embree_agreement = agree;
+        if (ts.rays) {
+          r.nodes_per_ray = static_cast<double>(ts.nodes_visited) / ts.rays;
+          r.tris_per_ray = static_cast<double>(ts.triangle_tests) / ts.rays;
+        }
+        r.sah_cost = b.stats.sah_cost;
+        r.nodes = b.stats.nodes;
+        r.leaves = b.stats.leaves;
+        r.max_depth = b.stats.max_depth;
+        records.push_back(r);
+      }
+    }
+  }
+  return records;
+}
+
+std::string format_bench_table(const std::vector<BenchRecord>& records) {
+  std::string s = fmt::format("{:<28} {:<8} {:>3} {:>9} {:>10} {:>9} {:>9} {:>8} {:>8} {:>7} {:>7}\n", "accel", "rays",
+                              "thr", "build ms", "bytes", "Mrays/s", "embree", "ratio", "agree %", "nodes/r", "tris/r");
+  for (const auto& r : records) {
+    s += fmt::format("{:<28} {:<8} {:>3} {:>9.2f} {:>10} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>7.1f} {:>7.1f}\n",
+                     r.accel.size() > 28 ? r.accel.substr(0, 28) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
+                     r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, 100.0 * r.embree_agreement,
+                     r.nodes_per_ray, r.tris_per_ray);
+  }
+  return s;
+}
+
+}  // namespace raylab

@@ -1,0 +1,52 @@
+#pragma once
+// The timing path of `raylab bench`: build every accelerator on the scene,
+// trace the same ray sets with each (Embree always included, in the same
+// process), median of repeats, ratios to Embree from this run.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "scenes/scene.h"
+
+namespace raylab {
+
+struct BenchOptions {
+  std::vector<std::string> ray_sets = {"primary", "random"};
+  int width = 512, height = 512;  // primary rays
+  size_t random_rays = 262144;
+  std::vector<int> threads = {1};
+  int repeats = 5;
+  int build_repeats = 1;
+  uint64_t seed = 1;
+  bool instrumented = true;  // one extra instrumented pass for per-ray counters
+  std::string embree_spec = "embree";
+};
+
+struct BenchRecord {
+  std::string scene, accel, ray_set;
+  size_t triangles = 0, rays = 0;
+  int threads = 1;
+  double build_ms = 0;
+  size_t bytes = 0;
+  double mrays_per_s = 0, mrays_min = 0, mrays_max = 0;
+  double embree_mrays_per_s = 0, ratio_to_embree = 0;
+  double embree_agreement = 1.0;  // fraction of rays answered like Embree (ties count as agreement)
+  double nodes_per_ray = 0, tris_per_ray = 0;
+  double sah_cost = 0;
+  size_t nodes = 0, leaves = 0;
+  int max_depth = 0;
+
+  nlohmann::json to_json() const;
+};
+
+using BenchProgress = std::function<void(const std::string& message)>;
+
+std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
+                                   const BenchOptions& options, const BenchProgress& progress = {});
+
+// Fixed-width table for the terminal.
+std::string format_bench_table(const std::vector<BenchRecord>& records);
+
+}  // namespace raylab

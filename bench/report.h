@@ -1,0 +1,18 @@
+#pragma once
+// Header fields of every JSON report: machine, build and revision, so a
+// figure can be traced to what produced it.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace raylab {
+
+nlohmann::json report_header(const std::string& command);
+
+std::string cpu_model();
+std::string git_revision();
+
+// Writes {header..., "records": records} atomically.
+void write_json_report(const std::string& path, nlohmann::json header, const nlohmann::json& records);
+
+}  // namespace raylab

@@ -1,0 +1,59 @@
+#include "bench/trace.h"
+
+#include <algorithm>
+#include <thread>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "accel/util/timer.h"
+
+namespace raylab {
+
+namespace {
+constexpr size_t kChunk = 256;  // rays per batch call: large enough to amortise dispatch
+}
+
+int hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
+void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOutput& out, TraversalStats* stats) {
+  const size_t n = set.rays.size();
+  if (set.occlusion) out.occluded.resize(n);
+  else out.hits.resize(n);
+  std::vector<TraversalStats> per_chunk(stats ? (n + kChunk - 1) / kChunk : 0);
+  tbb::task_arena arena(std::max(1, threads));
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, (n + kChunk - 1) / kChunk), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t c = r.begin(); c < r.end(); ++c) {
+        const size_t b = c * kChunk, e = std::min(n, b + kChunk);
+        const std::span<const Ray> rays(set.rays.data() + b, e - b);
+        TraversalStats* s = stats ? &per_chunk[c] : nullptr;
+        if (set.occlusion) accel.occluded(rays, std::span<uint8_t>(out.occluded.data() + b, e - b), s);
+        else accel.intersect(rays, std::span<Hit>(out.hits.data() + b, e - b), s);
+      }
+    });
+  });
+  if (stats)
+    for (const auto& s : per_chunk) *stats += s;
+}
+
+TraceTiming time_trace(const Accelerator& accel, const RaySet& set, int threads, int repeats) {
+  TraceOutput out;
+  trace_set(accel, set, threads, out);  // warm-up: caches, page faults, TBB workers
+  std::vector<double> times;
+  for (int i = 0; i < std::max(1, repeats); ++i) {
+    Timer t;
+    trace_set(accel, set, threads, out);
+    times.push_back(t.seconds());
+  }
+  std::sort(times.begin(), times.end());
+  TraceTiming timing;
+  timing.min_s = times.front();
+  timing.max_s = times.back();
+  const size_t m = times.size();
+  timing.median_s = m % 2 ? times[m / 2] : 0.5 * (times[m / 2 - 1] + times[m / 2]);
+  return timing;
+}
+
+}  // namespace raylab

@@ -1,0 +1,152 @@
+#include "bench/verify.h"
+
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include "accel/registry.h"
+#include "bench/oracle.h"
+#include "bench/trace.h"
+
+namespace raylab {
+
+namespace {
+
+bool same_distance(double a, double b, double tol) { return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30}); }
+
+struct Counts {
+  size_t hit_miss = 0, prim = 0, ties = 0, raylab_wrong = 0, embree_wrong = 0, occlusion = 0;
+  double max_rel = 0.0;
+  Counts& operator+=(const Counts& o) {
+    hit_miss += o.hit_miss;
+    prim += o.prim;
+    ties += o.ties;
+    raylab_wrong += o.raylab_wrong;
+    embree_wrong += o.embree_wrong;
+    occlusion += o.occlusion;
+    max_rel = std::max(max_rel, o.max_rel);
+    return *this;
+  }
+};
+
+// Compares closest hits (and the accelerator's own any-hit answers).
+Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<Hit>& ref, const std::vector<Hit>& got,
+                       const std::vector<uint8_t>& got_occ, double tol) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, set.rays.size(), 512), Counts{},
+      [&](const tbb::blocked_range<size_t>& r, Counts c) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const Hit& e = ref[i];
+          const Hit& a = got[i];
+          if (static_cast<bool>(got_occ[i]) != a.valid()) c.occlusion++;
+          if (e.valid() && a.valid())
+            c.max_rel = std::max(c.max_rel, std::fabs(static_cast<double>(a.t) - e.t) / std::max(1e-30, std::fabs(static_cast<double>(e.t))));
+          const bool hit_miss = e.valid() != a.valid();
+          const bool prim = e.valid() && a.valid() && e.prim != a.prim;
+          if (!hit_miss && !prim) continue;
+          if (prim && same_distance(a.t, e.t, tol)) {
+            c.ties++;
+            continue;
+          }
+          const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
+          if (o.grazing) {
+            c.ties++;
+            continue;
+          }
+          if (hit_miss) c.hit_miss++;
+          else c.prim++;
+          auto agrees = [&](const Hit& h) {
+            if (h.valid() != o.valid) return false;
+            return !h.valid() || h.prim == o.prim || same_distance(h.t, o.t, tol);
+          };
+          if (!agrees(a)) c.raylab_wrong++;
+          if (!agrees(e)) c.embree_wrong++;
+        }
+        return c;
+      },
+      [](Counts a, const Counts& b) { return a += b; });
+}
+
+// Compares occlusion answers.
+Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vector<uint8_t>& ref,
+                         const std::vector<uint8_t>& got) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, set.rays.size(), 512), Counts{},
+      [&](const tbb::blocked_range<size_t>& r, Counts c) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          if (ref[i] == got[i]) continue;
+          const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
+          if (o.grazing) {
+            c.ties++;
+            continue;
+          }
+          c.hit_miss++;
+          if (static_cast<bool>(got[i]) != o.valid) c.raylab_wrong++;
+          if (static_cast<bool>(ref[i]) != o.valid) c.embree_wrong++;
+        }
+        return c;
+      },
+      [](Counts a, const Counts& b) { return a += b; });
+}
+
+}  // namespace
+
+std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vector<std::string>& accel_specs,
+                                              const VerifyOptions& opt) {
+  const int threads = opt.threads > 0 ? opt.threads : hardware_threads();
+  auto reference = make_accelerator(opt.reference);
+  reference->build(scene.mesh);
+
+  RaySetOptions rso;
+  rso.jittered_primary = true;
+  rso.primary_count = opt.rays;
+  rso.random_count = opt.rays;
+  rso.seed = opt.seed;
+  const std::vector<RaySet> sets = make_ray_sets(scene, opt.ray_sets, *reference, rso);
+
+  std::vector<TraceOutput> ref_out(sets.size());
+  for (size_t s = 0; s < sets.size(); ++s) trace_set(*reference, sets[s], threads, ref_out[s]);
+
+  std::vector<VerifyRecord> records;
+  for (const auto& spec : accel_specs) {
+    auto accel = make_accelerator(spec);
+    const BuildStats bs = accel->build(scene.mesh);
+    for (size_t s = 0; s < sets.size(); ++s) {
+      const RaySet& set = sets[s];
+      VerifyRecord rec;
+      rec.scene = scene.name;
+      rec.accel = accel->spec();
+      rec.ray_set = set.name;
+      rec.rays = set.rays.size();
+      rec.build_ms = bs.build_ms;
+      TraceOutput out;
+      trace_set(*accel, set, threads, out);
+      Counts c;
+      tbb::task_arena arena(threads);
+      if (set.occlusion) {
+        arena.execute([&] { c = compare_occlusion(scene, set, ref_out[s].occluded, out.occluded); });
+      } else {
+        RaySet as_occlusion = set;
+        as_occlusion.occlusion = true;
+        TraceOutput occ;
+        trace_set(*accel, as_occlusion, threads, occ);
+        arena.execute([&] {
+          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, opt.tie_tolerance);
+        });
+      }
+      rec.hit_miss_disagree = c.hit_miss;
+      rec.prim_disagree = c.prim;
+      rec.ties = c.ties;
+      rec.raylab_wrong = c.raylab_wrong;
+      rec.embree_wrong = c.embree_wrong;
+      rec.occlusion_disagree = c.occlusion;
+      rec.max_rel_t_err = c.max_rel;
+      records.push_back(rec);
+    }
+  }
+  return records;
+}
+
+}  // namespace raylab

@@ -1,0 +1,43 @@
+#include "scenes/scene.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace raylab {
+
+bool Scene::has_emitters() const {
+  for (const auto& m : materials)
+    if (m.is_emissive()) return true;
+  return false;
+}
+
+void Scene::validate() const {
+  mesh.validate();
+  if (material_ids.size() != mesh.num_triangles())
+    throw MeshError(fmt::format("scene '{}': {} material ids for {} triangles", name, material_ids.size(),
+                                mesh.num_triangles()));
+  for (size_t i = 0; i < material_ids.size(); ++i)
+    if (material_ids[i] >= materials.size())
+      throw MeshError(fmt::format("scene '{}': triangle {} uses material {}, but there are {} materials", name, i,
+                                  material_ids[i], materials.size()));
+}
+
+View frame_bounds(const Aabb& box, int width, int height, float fov_deg) {
+  View v;
+  v.width = width;
+  v.height = height;
+  v.fov_deg = fov_deg;
+  v.up = Vec3f::UnitY();
+  if (box.is_empty()) return v;
+  const Vec3f c = box.center();
+  const float radius = std::max(0.5f * box.diagonal().norm(), 1e-30f);
+  const float half = 0.5f * fov_deg * static_cast<float>(M_PI) / 180.0f;
+  const float dist = 1.1f * radius / std::sin(half);
+  const Vec3f dir = Vec3f(0.55f, 0.45f, 1.0f).normalized();
+  v.at = c;
+  v.from = c + dist * dir;
+  return v;
+}
+
+}  // namespace raylab

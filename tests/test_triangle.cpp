@@ -1,0 +1,120 @@
+// Ray-triangle kernels: interior, edge and vertex hits; watertightness of a
+// closed sphere's shared edges and vertices.
+#include <gtest/gtest.h>
+
+#include "accel/core/intersect_triangle.h"
+#include "accel/registry.h"
+#include "scenes/procedural.h"
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+const Vec3f A(0, 0, 0), B(1, 0, 0), C(0, 1, 0);
+
+bool hit_wt(const Ray& r, float& t, float& u, float& v) {
+  return intersect_watertight(WatertightRay(r), A, B, C, r.tmin, r.tmax, t, u, v);
+}
+
+TEST(WatertightTriangle, InteriorHitGivesDistanceAndBarycentrics) {
+  const Ray r(Vec3f(0.25f, 0.5f, 2.0f), Vec3f(0, 0, -1));
+  float t, u, v;
+  ASSERT_TRUE(hit_wt(r, t, u, v));
+  EXPECT_FLOAT_EQ(t, 2.0f);
+  EXPECT_FLOAT_EQ(u, 0.25f);  // weight of B
+  EXPECT_FLOAT_EQ(v, 0.5f);   // weight of C
+}
+
+TEST(WatertightTriangle, BothSidesAreHit) {
+  const Ray r(Vec3f(0.25f, 0.25f, -3.0f), Vec3f(0, 0, 1));
+  float t, u, v;
+  ASSERT_TRUE(hit_wt(r, t, u, v));
+  EXPECT_FLOAT_EQ(t, 3.0f);
+}
+
+TEST(WatertightTriangle, EdgesAndVerticesAreHit) {
+  float t, u, v;
+  for (const Vec3f& p : {Vec3f(0.5f, 0, 0), Vec3f(0, 0.5f, 0), Vec3f(0.5f, 0.5f, 0), A, B, C}) {
+    const Ray r(p + Vec3f(0, 0, 1), Vec3f(0, 0, -1));
+    EXPECT_TRUE(hit_wt(r, t, u, v)) << "point " << p.transpose();
+    EXPECT_FLOAT_EQ(t, 1.0f);
+  }
+}
+
+TEST(WatertightTriangle, OutsideParallelAndOutOfRangeMiss) {
+  float t, u, v;
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(0.6f, 0.6f, 1), Vec3f(0, 0, -1)), t, u, v));
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(-0.01f, 0.2f, 1), Vec3f(0, 0, -1)), t, u, v));
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(0.2f, 0.2f, 1), Vec3f(1, 0, 0)), t, u, v));     // parallel to the plane
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(0.2f, 0.2f, 1), Vec3f(0, 0, 1)), t, u, v));     // pointing away
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(0.2f, 0.2f, 1), Vec3f(0, 0, -1), 0.0f, 0.5f), t, u, v));  // tmax too short
+  EXPECT_FALSE(hit_wt(Ray(Vec3f(0.2f, 0.2f, 1), Vec3f(0, 0, -1), 1.5f), t, u, v));        // tmin too far
+}
+
+TEST(WatertightTriangle, DegenerateTriangleIsNeverHit) {
+  float t, u, v;
+  const WatertightRay w(Ray(Vec3f(0.5f, 0, 1), Vec3f(0, 0, -1)));
+  EXPECT_FALSE(intersect_watertight(w, A, B, Vec3f(2, 0, 0), 0, 10, t, u, v));  // collinear
+  EXPECT_FALSE(intersect_watertight(w, B, B, B, 0, 10, t, u, v));              // a point
+}
+
+TEST(MollerTrumbore, AgreesWithWatertightInTheInterior) {
+  Pcg32 rng(7, 1);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3f target(0.05f + 0.4f * rng.uniform(), 0.05f + 0.4f * rng.uniform(), 0);
+    const Vec3f org = target + Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, 1.0f + rng.uniform());
+    const Ray r(org, (target - org).normalized());
+    float t1, u1, v1, t2, u2, v2;
+    ASSERT_TRUE(hit_wt(r, t1, u1, v1));
+    ASSERT_TRUE(intersect_moller_trumbore(r, A, B, C, r.tmin, r.tmax, t2, u2, v2));
+    EXPECT_NEAR(t1, t2, 1e-5f * t1);
+    EXPECT_NEAR(u1, u2, 1e-5f);
+    EXPECT_NEAR(v1, v2, 1e-5f);
+  }
+}
+
+// Rays from outside aimed at the sphere's shared edges and vertices must hit
+// something (the surface is closed); rays from the centre must never escape.
+size_t count_sphere_leaks(const std::string& spec, size_t rays_per_kind, const Vec3f& center,
+                          size_t remove_triangle = SIZE_MAX) {
+  TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
+  const TriangleMesh full = sphere;
+  if (remove_triangle < sphere.num_triangles()) sphere.triangles.erase(sphere.triangles.begin() + remove_triangle);
+  auto accel = make_accelerator(spec);
+  accel->build(sphere);
+  Pcg32 rng(42, 3);
+  size_t leaks = 0;
+  for (size_t i = 0; i < rays_per_kind; ++i) {
+    // Targets on the complete sphere, alternating vertices and edge points.
+    const size_t tri = rng.next() % full.num_triangles();
+    const int corner = static_cast<int>(rng.next() % 3);
+    const Vec3f& p = full.vertex(tri, corner);
+    const Vec3f& q = full.vertex(tri, (corner + 1) % 3);
+    const Vec3f target = (i % 2) ? p : Vec3f(p + rng.uniform() * (q - p));
+    // Come from outside within 60 degrees of the outward radial direction:
+    // steeper than any face's tilt, so the ray truly crosses the surface.
+    const Vec3f radial = (target - center).normalized();
+    Vec3f w = test::random_direction(rng);
+    while (w.dot(radial) < 0.5f) w = test::random_direction(rng);
+    const Vec3f org = target + 2.0f * w;
+    if (!accel->intersect1(Ray(org, (target - org).normalized())).valid()) ++leaks;
+    if (!accel->intersect1(Ray(center, test::random_direction(rng))).valid()) ++leaks;
+  }
+  return leaks;
+}
+
+TEST(Watertightness, ClosedSphereHasNoLeaksWithWatertightTest) {
+  for (const char* spec : {"brute", "bvh"}) {
+    EXPECT_EQ(count_sphere_leaks(spec, 20000, Vec3f(0.3f, -0.2f, 0.1f)), 0u) << spec;
+    // Far from the origin the float spacing is 1/128 of the sphere's radius.
+    EXPECT_EQ(count_sphere_leaks(spec, 20000, Vec3f(1e5f, -2e4f, 3e4f)), 0u) << spec << " far";
+  }
+}
+
+TEST(Watertightness, LeakCounterFindsAHole) {
+  // The counter is able to fail: one missing triangle lets rays through.
+  EXPECT_GT(count_sphere_leaks("bvh", 20000, Vec3f::Zero(), 700), 0u);
+}
+
+}  // namespace
+}  // namespace raylab
