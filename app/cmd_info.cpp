@@ -10,11 +10,13 @@ namespace raylab::cli {
 
 Runner add_info(CLI::App& app) {
   auto scene_spec = std::make_shared<std::string>("cornell");
+  auto positional = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
-  cmd->add_option("--scene", *scene_spec, "procedural scene spec or mesh file")->capture_default_str();
-  return [scene_spec]() {
+  auto* scene_opt = cmd->add_option("--scene", *scene_spec, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
+  cmd->add_option("scene", *positional, "the scene, as for --scene")->excludes(scene_opt);
+  return [scene_spec, positional]() {
     Timer t;
-    const Scene s = load_scene(*scene_spec);
+    const Scene s = load_scene(positional->empty() ? *scene_spec : *positional);
     const double ms = t.ms();
     const Aabb b = s.bounds();
     size_t emitters = 0;

@@ -1,6 +1,9 @@
 #include "scenes/mesh_precheck.h"
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -111,15 +114,28 @@ void precheck_ply(const std::string& path, uint64_t file_size) {
   }
 }
 
+// Reads the next data line (not blank, not a comment); false at the end.
+bool next_data_line(std::istream& in, std::string& line, uint64_t& line_no) {
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    if (line.find_first_not_of(" \t\r") != std::string::npos) return true;
+  }
+  return false;
+}
+
+// OFF files declare their counts; Assimp 5.2 clamps out-of-range indices and
+// reads past short face records silently, so the whole file is checked here
+// (line by line, as Assimp reads it): counts, vertex coordinates, face sizes
+// and indices.
 void precheck_off(const std::string& path, uint64_t file_size) {
   std::ifstream in(path);
   std::string line;
-  // Skip the OFF keyword line (it may also carry the counts) and comments.
+  uint64_t line_no = 0;
   std::vector<uint64_t> counts;
   bool keyword = false;
-  while (counts.size() < 2 && std::getline(in, line)) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
+  while (counts.size() < 2 && next_data_line(in, line, line_no)) {
     std::istringstream ls(line);
     std::string word;
     while (ls >> word) {
@@ -127,21 +143,97 @@ void precheck_off(const std::string& path, uint64_t file_size) {
         keyword = true;
         continue;
       }
-      try {
-        counts.push_back(std::stoull(word));
-      } catch (const std::exception&) {
-        throw SceneLoadError(fmt::format("{}: OFF header has an invalid count '{}'", path, word));
-      }
+      uint64_t v = 0;
+      const auto [p, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
+      if (!keyword || ec != std::errc() || p != word.data() + word.size())
+        throw SceneLoadError(fmt::format("{}: line {}: OFF header has an invalid count '{}'", path, line_no, word));
+      counts.push_back(v);
     }
   }
   if (!keyword || counts.size() < 2) throw SceneLoadError(fmt::format("{}: not an OFF file (no OFF header with counts)", path));
-  const uint64_t total = counts[0] + counts[1];
-  if (total > file_size)
+  const uint64_t nv = counts[0], nf = counts[1];
+  if (nv + nf > file_size)
     throw SceneLoadError(fmt::format("{}: OFF header declares {} vertices and {} faces, but the file has only {} bytes", path,
-                                     counts[0], counts[1], file_size));
-  const uint64_t lines = count_data_lines(in, total);
-  if (lines < total)
-    throw SceneLoadError(fmt::format("{}: truncated OFF file: {} vertex and face lines declared, {} present", path, total, lines));
+                                     nv, nf, file_size));
+  auto truncated = [&](const char* what, uint64_t have, uint64_t want) {
+    return SceneLoadError(fmt::format("{}: truncated OFF file: {} {} declared, {} present", path, want, what, have));
+  };
+  for (uint64_t i = 0; i < nv; ++i) {
+    if (!next_data_line(in, line, line_no)) throw truncated("vertices", i, nv);
+    const char* p = line.data();
+    const char* end = line.data() + line.size();
+    for (int k = 0; k < 3; ++k) {
+      while (p < end && (*p == ' ' || *p == '\t')) ++p;
+      if (p < end && *p == '+') ++p;  // from_chars takes no plus sign
+      float x = 0;
+      const auto [q, ec] = std::from_chars(p, end, x);
+      if (ec != std::errc() || (q < end && *q != ' ' && *q != '\t' && *q != '\r'))
+        throw SceneLoadError(fmt::format("{}: line {}: vertex {} needs 3 numbers: '{}'", path, line_no, i, line));
+      if (!std::isfinite(x))
+        throw SceneLoadError(fmt::format("{}: line {}: vertex {} has a non-finite coordinate", path, line_no, i));
+      p = q;
+    }
+  }
+  for (uint64_t f = 0; f < nf; ++f) {
+    if (!next_data_line(in, line, line_no)) throw truncated("faces", f, nf);
+    std::istringstream ls(line);
+    std::string word;
+    auto next_index = [&](uint64_t& v) {
+      if (!(ls >> word)) return false;
+      const auto [p, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
+      if (ec != std::errc() || p != word.data() + word.size())
+        throw SceneLoadError(fmt::format("{}: line {}: face {}: '{}' is not a vertex index", path, line_no, f, word));
+      return true;
+    };
+    uint64_t n = 0;
+    next_index(n);
+    for (uint64_t k = 0; k < n; ++k) {
+      uint64_t v = 0;
+      if (!next_index(v))
+        throw SceneLoadError(fmt::format("{}: line {}: face {} declares {} vertices but lists {}", path, line_no, f, n, k));
+      if (v >= nv)
+        throw SceneLoadError(fmt::format("{}: line {}: face {} refers to vertex {}, but the file declares {} vertices (index out of range)",
+                                         path, line_no, f, v, nv));
+    }
+  }
+}
+
+// A binary STL is an 80-byte header, a triangle count and 50 bytes per
+// triangle; an ASCII STL starts with "solid" and ends with "endsolid". Some
+// binary headers start with "solid" too, so the size decides first.
+void precheck_stl(const std::string& path, uint64_t file_size) {
+  std::ifstream in(path, std::ios::binary);
+  char head[84] = {};
+  in.read(head, sizeof head);
+  const auto got = static_cast<uint64_t>(in.gcount());
+  if (got == 84) {
+    uint32_t count = 0;
+    std::memcpy(&count, head + 80, 4);
+    if (84 + 50ull * count == file_size) return;  // a complete binary STL
+  }
+  std::string start(head, got);
+  const auto first = start.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && start.compare(first, 5, "solid") == 0) {
+    // ASCII: the last word of the file must close the solid.
+    const uint64_t tail_bytes = std::min<uint64_t>(file_size, 4096);
+    std::string tail(tail_bytes, '\0');
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(file_size - tail_bytes));
+    in.read(tail.data(), static_cast<std::streamsize>(tail_bytes));
+    tail.resize(static_cast<size_t>(in.gcount()));
+    const auto last = tail.find_last_not_of(" \t\r\n");
+    const auto line_start = last == std::string::npos ? std::string::npos : tail.find_last_of("\n", last);
+    const std::string last_line = last == std::string::npos ? "" : tail.substr(line_start == std::string::npos ? 0 : line_start + 1);
+    if (last_line.find("endsolid") == std::string::npos)
+      throw SceneLoadError(fmt::format("{}: truncated ASCII STL: the file does not end with 'endsolid'", path));
+    return;
+  }
+  if (got < 84)
+    throw SceneLoadError(fmt::format("{}: not an STL file: {} bytes, neither 'solid' text nor an 84-byte binary header", path, got));
+  uint32_t count = 0;
+  std::memcpy(&count, head + 80, 4);
+  throw SceneLoadError(fmt::format("{}: truncated or malformed binary STL: the header declares {} triangles ({} bytes), the file has {} bytes",
+                                   path, count, 84 + 50ull * count, file_size));
 }
 
 }  // namespace
@@ -153,6 +245,8 @@ void precheck_mesh_file(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext == ".ply") precheck_ply(path, size);
   else if (ext == ".off") precheck_off(path, size);
+  else if (ext == ".stl") precheck_stl(path, size);
+  else if (ext == ".gltf" || ext == ".glb") precheck_gltf(path, size);
 }
 
 }  // namespace raylab
