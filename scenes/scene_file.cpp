@@ -299,7 +299,11 @@ class SceneFileReader {
     const auto vertex_base = static_cast<uint64_t>(scene.mesh.num_vertices());
     const auto material_base = static_cast<uint32_t>(scene.materials.size());
     if (vertex_base + part.mesh.num_vertices() >= 0xFFFFFFFFull) fail(ptr, "the scene has more vertices than 32-bit indices can address");
-    scene.mesh.append(part.mesh);
+    // Not TriangleMesh::append, which reserves the exact size on every call.
+    scene.mesh.vertices.insert(scene.mesh.vertices.end(), part.mesh.vertices.begin(), part.mesh.vertices.end());
+    for (const auto& t : part.mesh.triangles)
+      scene.mesh.triangles.push_back({static_cast<uint32_t>(vertex_base + t[0]), static_cast<uint32_t>(vertex_base + t[1]),
+                                      static_cast<uint32_t>(vertex_base + t[2])});
     scene.materials.insert(scene.materials.end(), part.materials.begin(), part.materials.end());
     scene.material_ids.reserve(scene.material_ids.size() + part.material_ids.size());
     for (uint32_t id : part.material_ids) scene.material_ids.push_back(material_base + id);

@@ -49,8 +49,8 @@ Scene load_scene(const std::string& text) {
 std::string describe_scenes() {
   std::string s;
   for (const auto& g : scene_generators()) {
-    s += fmt::format("{:<10} {}\n", g.name, g.help);
-    for (const auto& p : g.params) s += fmt::format("    {}={:<8} {}\n", p.name, p.default_value, p.help);
+    s += fmt::format("{:<12} {}\n", g.name, g.help);
+    for (const auto& p : g.params) s += fmt::format("    {:<18} {}\n", p.name + "=" + p.default_value, p.help);
   }
   s += "Any mesh file Assimp reads (OBJ, PLY, STL, OFF, glTF 2.0, NFF, ...) can be given as a path,\n"
        "and so can a JSON scene file (see README, 'Scene files').\n";
