@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,7 @@ struct BufferData {
   uint64_t file_offset = 0;
   uint64_t size = 0;        // bytes actually available
   uint64_t byte_length = 0; // bytes declared
+  mutable std::shared_ptr<std::ifstream> stream;
 
   bool read(uint64_t offset, uint64_t n, char* dst) const {
     if (offset + n > size) return false;
@@ -65,7 +67,9 @@ struct BufferData {
       std::copy_n(memory.data() + offset, n, dst);
       return true;
     }
-    std::ifstream in(file, std::ios::binary);
+    if (!stream) stream = std::make_shared<std::ifstream>(file, std::ios::binary);
+    std::ifstream& in = *stream;
+    in.clear();
     in.seekg(static_cast<std::streamoff>(file_offset + offset));
     in.read(dst, static_cast<std::streamsize>(n));
     return static_cast<uint64_t>(in.gcount()) == n;
@@ -236,6 +240,7 @@ class GltfChecker {
 
   void check_meshes() {
     const json& meshes = array(doc_, "meshes");
+    size_t triangle_primitives = 0;
     for (size_t m = 0; m < meshes.size(); ++m) {
       const json& prims = array(meshes[m], "primitives");
       for (size_t p = 0; p < prims.size(); ++p) {
@@ -243,6 +248,7 @@ class GltfChecker {
         const std::string where = fmt::format("meshes[{}].primitives[{}]", m, p);
         const uint64_t mode = uint_field(prim, "mode", where, 4);
         if (mode < 4) continue;  // points and lines: no surface, dropped by the importer
+        ++triangle_primitives;
         if (!prim.contains("attributes") || !prim["attributes"].is_object() || !prim["attributes"].contains("POSITION"))
           fail(where + " has no POSITION attribute");
         uint64_t offset = 0, stride = 0, elem = 0, vertices = 0, type = 0;
@@ -264,25 +270,33 @@ class GltfChecker {
         check_indices(buffers_[buffer], offset, stride, elem, count, vertices, where);
       }
     }
+    if (triangle_primitives == 0) fail("contains no triangles (no mesh primitive of triangles)");
   }
 
   void check_indices(const BufferData& data, uint64_t offset, uint64_t stride, uint64_t elem, uint64_t count,
                      uint64_t vertices, const std::string& where) const {
-    std::string bytes(stride * (count - 1) + elem, '\0');
-    if (!data.read(offset, bytes.size(), bytes.data())) fail(where + ": cannot read the index data");
-    for (uint64_t i = 0; i < count; ++i) {
-      const char* p = bytes.data() + i * stride;
-      uint32_t v = 0;
-      if (elem == 1) v = static_cast<uint8_t>(*p);
-      else if (elem == 2) {
-        uint16_t s;
-        std::memcpy(&s, p, 2);
-        v = s;
-      } else {
-        std::memcpy(&v, p, 4);
+    // In chunks, so a large index buffer needs no large temporary.
+    constexpr uint64_t kChunk = 1 << 16;
+    std::string bytes;
+    for (uint64_t first = 0; first < count; first += kChunk) {
+      const uint64_t n = std::min(kChunk, count - first);
+      bytes.resize(stride * (n - 1) + elem);
+      if (!data.read(offset + first * stride, bytes.size(), bytes.data())) fail(where + ": cannot read the index data");
+      for (uint64_t i = 0; i < n; ++i) {
+        const char* p = bytes.data() + i * stride;
+        uint32_t v = 0;
+        if (elem == 1) {
+          v = static_cast<uint8_t>(*p);
+        } else if (elem == 2) {
+          uint16_t s;
+          std::memcpy(&s, p, 2);
+          v = s;
+        } else {
+          std::memcpy(&v, p, 4);
+        }
+        if (v >= vertices)
+          fail(fmt::format("{}: index {} is {}, but POSITION has {} vertices (index out of range)", where, first + i, v, vertices));
       }
-      if (v >= vertices)
-        fail(fmt::format("{}: index {} is {}, but POSITION has {} vertices (index out of range)", where, i, v, vertices));
     }
   }
 
