@@ -371,6 +371,9 @@ Scene load_mesh_file(const std::string& path) {
   }
 
   precheck_mesh_file(path);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::optional<View> nff_view = ext == ".nff" ? read_nff_view(path) : std::nullopt;
   Scene s;
   s.name = path;
   import_isolated(path, s);
@@ -382,11 +385,7 @@ Scene load_mesh_file(const std::string& path) {
     throw SceneLoadError(fmt::format("{}: {}", path, e.what()));
   }
 
-  s.view = frame_bounds(s.bounds());
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".nff")
-    if (const auto v = read_nff_view(path)) s.view = *v;
+  s.view = nff_view ? *nff_view : frame_bounds(s.bounds());
   apply_sibling_view_file(path, s.view);
   s.background = s.has_emitters() ? Vec3f::Constant(0.05f) : Vec3f::Constant(1.0f);
   return s;

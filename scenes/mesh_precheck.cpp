@@ -158,9 +158,10 @@ void precheck_off(const std::string& path, uint64_t file_size) {
         keyword = true;
         continue;
       }
+      if (!keyword) throw SceneLoadError(fmt::format("{}: not an OFF file (line {} comes before any OFF keyword)", path, line_no));
       uint64_t v = 0;
       const auto [p, ec] = std::from_chars(word.data(), word.data() + word.size(), v);
-      if (!keyword || ec != std::errc() || p != word.data() + word.size())
+      if (ec != std::errc() || p != word.data() + word.size())
         throw SceneLoadError(fmt::format("{}: line {}: OFF header has an invalid count '{}'", path, line_no, word));
       counts.push_back(v);
     }

@@ -90,6 +90,7 @@ class SceneFileReader {
       std::string what = e.what();
       const auto bracket = what.find("] ");
       if (bracket != std::string::npos) what = what.substr(bracket + 2);
+      if (what.size() > 200) what = what.substr(0, 200) + "...";  // "last read" may quote a long string
       fail("", "malformed JSON (" + what + ")");
     }
   }
