@@ -44,9 +44,10 @@ struct Flake {
 
 SceneGenerator sphereflake_generator() {
   return {"sphereflake",
-          "recursive spheres (Haines' SPD 'balls'): 9 children of 1/3 the radius per sphere, on a ground plane",
+          "recursive spheres (Haines' SPD 'balls'): 9 children of 1/3 the radius per sphere, on a ground plane; root radius 1 at the origin",
           {{"level", "3", "recursion depth (spheres: 1 + 9 + ... + 9^level)"},
-           {"segments", "16", "sphere tessellation: segments around, segments/2 rings"}},
+           {"segments", "16", "sphere tessellation: segments around, segments/2 rings"},
+           {"ground", "1", "add a ground plane (0: the flake alone, e.g. for scene files)"}},
           [](const Params& p) {
             const int level = p.integer("level"), segments = p.integer("segments");
             if (level < 0 || level > 7) throw SpecError("sphereflake: level must be in 0..7");
@@ -63,7 +64,8 @@ SceneGenerator sphereflake_generator() {
             Flake flake{level, segments, mats, s};
             flake.grow(Vec3f::Zero(), 1.0f, Vec3f::UnitY(), 0);
             const Aabb b = s.bounds();
-            add_ground(s, Vec3f(0, b.lo.y(), 0), 4.0f * std::max(b.diagonal().x(), b.diagonal().z()), add_material(s, Vec3f::Constant(0.5f)));
+            if (p.boolean("ground"))
+              add_ground(s, Vec3f(0, b.lo.y(), 0), 4.0f * std::max(b.diagonal().x(), b.diagonal().z()), add_material(s, Vec3f::Constant(0.5f)));
             s.view = look_at(Vec3f(0, 0.1f, 0), Vec3f(1.0f, 0.8f, 1.6f), 6.4f, 40.0f);
             s.background = Vec3f::Constant(1.0f);
             return s;

@@ -75,7 +75,7 @@ TriangleMesh make_uv_sphere(int segments, int rings, const Vec3f& center, float 
 const std::vector<SceneGenerator>& scene_generators() {
   static const std::vector<SceneGenerator> generators = [] {
   std::vector<SceneGenerator> list = {
-      {"cornell", "the Cornell box from the published measurements (36 triangles, area light)", {},
+      {"cornell", "the Cornell box from the published measurements (32 triangles, area light)", {},
        [](const Params&) { return make_cornell_box(); }},
       {"soup", "random triangles in the unit cube",
        {{"n", "10000", "number of triangles"},
