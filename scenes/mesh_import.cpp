@@ -103,8 +103,12 @@ void collect(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent
 Material material_from(const aiMaterial* am) {
   Material m;  // default grey
   aiColor3D c;
+  // Pure white (1, 1, 1) is what Assimp reports when the file gives no colour
+  // (PLY, STL, and glTF's default baseColorFactor); as an albedo it would
+  // reflect all light forever, and a white object under the white default
+  // sky is invisible. It is read as "no colour": the default grey.
   if (am->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS && std::isfinite(c.r) && std::isfinite(c.g) &&
-      std::isfinite(c.b) && (c.r > 0 || c.g > 0 || c.b > 0))
+      std::isfinite(c.b) && (c.r > 0 || c.g > 0 || c.b > 0) && !(c.r == 1.0f && c.g == 1.0f && c.b == 1.0f))
     m.albedo = Vec3f(c.r, c.g, c.b).cwiseMax(0.0f).cwiseMin(0.99f);  // albedo 1 would never lose energy
   aiColor3D e;
   if (am->Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS && std::isfinite(e.r) && std::isfinite(e.g) &&
