@@ -63,6 +63,8 @@ TEST(SceneImport, PlyAsciiBinaryLittleAndBigEndianKeepExactCoordinates) {
   ASSERT_EQ(le.mesh.num_vertices(), 4u);
   for (size_t v = 0; v < 4; ++v) EXPECT_EQ(le.mesh.vertices[v], Vec3f(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2])) << v;
   EXPECT_EQ(le.mesh.triangles[1], (std::array<uint32_t, 3>{0, 2, 3}));
+  // PLY gives no colour (Assimp reports white): the default grey, visible against the sky.
+  EXPECT_LT(le.material_of(0).albedo.maxCoeff(), 0.9f);
 
   std::string be = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
@@ -99,6 +101,7 @@ TEST(SceneImport, StlAsciiAndBinary) {
   EXPECT_EQ(b.num_triangles(), 3u);
   EXPECT_EQ(b.bounds().lo, Vec3f(0, 0, -2));
   EXPECT_EQ(b.bounds().hi, Vec3f(1, 1, 5));
+  EXPECT_LT(b.material_of(0).albedo.maxCoeff(), 0.9f);  // no colour in STL: default grey
 }
 
 TEST(SceneImport, OffPolygonsAreTriangulated) {

@@ -12,6 +12,7 @@
 
 #include "accel/registry.h"
 #include "scenes/mesh_import.h"
+#include "scenes/scene_registry.h"
 #include "tests/test_util.h"
 #include "tracer/camera.h"
 
@@ -68,6 +69,34 @@ TEST(SharedScenes, SpdScenesLoadWithTheirOwnViewpoints) {
     ++checked;
   }
   EXPECT_GE(checked, 10);
+}
+
+TEST(SharedScenes, SceneFilesForSharedMeshesLoadAndSeeTheirMeshes) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
+  const std::filesystem::path dir = std::filesystem::path(RAYLAB_SOURCE_DIR) / "scenes" / "shared";
+  int checked = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    const Scene s = load_scene(entry.path().string());
+    EXPECT_EQ(view_problem(s.view), "");
+    EXPECT_TRUE(s.has_emitters() || s.background.maxCoeff() > 0.0f);
+    if (s.num_triangles() < 100000) {  // the viewpoint check builds a BVH: small ones only
+      auto accel = make_accelerator("bvh");
+      accel->build(s.mesh);
+      View v = s.view;
+      v.width = v.height = 16;
+      const PinholeCamera cam(v);
+      std::vector<Ray> rays;
+      for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
+      std::vector<Hit> hits(rays.size());
+      accel->intersect(rays, hits);
+      EXPECT_GT(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); }), 128);
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 4);
 }
 
 TEST(SharedScenes, AwkwardButValidFilesLoadAndPointCloudsAreRefused) {
