@@ -14,6 +14,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <regex>
 #include <thread>
 
@@ -249,7 +251,10 @@ double import_timeout_seconds(const std::string& path) {
   return 30.0 + 2.0 * (ec ? 0.0 : mb);  // generous: real files load at > 20 MB/s
 }
 
-void import_isolated(const std::string& path, Scene& s) {
+// Runs the import in a child; `meanwhile` runs in this process at the same
+// time (the prechecks: on two cores they cost no wall time), and if it
+// throws, the child is killed and its exception wins.
+void import_isolated(const std::string& path, Scene& s, const std::function<void()>& meanwhile) {
   const int fd = ::memfd_create("raylab-import", MFD_CLOEXEC);
   if (fd < 0) throw SceneLoadError(fmt::format("{}: cannot create memory file: {}", path, std::strerror(errno)));
   struct Closer {
@@ -260,9 +265,16 @@ void import_isolated(const std::string& path, Scene& s) {
   const pid_t pid = ::fork();
   if (pid < 0) throw SceneLoadError(fmt::format("{}: cannot fork the importer: {}", path, std::strerror(errno)));
   if (pid == 0) child_import(path, fd);
+  int status = 0;
+  try {
+    meanwhile();
+  } catch (...) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    throw;
+  }
 
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(import_timeout_seconds(path));
-  int status = 0;
   auto poll = std::chrono::microseconds(200);
   while (true) {
     const pid_t r = ::waitpid(pid, &status, WNOHANG);
@@ -374,13 +386,17 @@ Scene load_mesh_file(const std::string& path) {
     if (n == 0) throw SceneLoadError(fmt::format("{}: file is empty", path));
   }
 
-  precheck_mesh_file(path);
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  const std::optional<View> nff_view = ext == ".nff" ? read_nff_view(path) : std::nullopt;
+  std::optional<View> nff_view;
   Scene s;
   s.name = path;
-  import_isolated(path, s);
+  // The prechecks run while the child imports; their precise messages take
+  // precedence over whatever Assimp makes of a bad file.
+  import_isolated(path, s, [&] {
+    precheck_mesh_file(path);
+    if (ext == ".nff") nff_view = read_nff_view(path);
+  });
   if (s.mesh.num_triangles() == 0) throw SceneLoadError(fmt::format("{}: contains no triangles", path));
   if (s.materials.empty()) s.materials.push_back(Material{});
   try {
