@@ -349,6 +349,7 @@ void apply_sibling_view_file(const std::string& mesh_path, View& v) {
     throw SceneLoadError(fmt::format("{}: invalid view file: {}", file.string(), e.what()));
   }
   if (!j.is_object()) throw SceneLoadError(fmt::format("{}: a view file must hold a JSON object", file.string()));
+  if (j.contains("meshes") && !j.contains("from")) return;  // a scene file that happens to share the name
   View out = v;
   out.from = json_vec3(j, "from", file.string());
   out.at = json_vec3(j, "at", file.string());

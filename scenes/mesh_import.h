@@ -27,7 +27,7 @@ class SceneLoadError : public std::runtime_error {
 Scene load_mesh_file(const std::string& path);
 
 // The view file next to a mesh (NAME.json for NAME.ext), applied to `view`
-// if it exists. Throws SceneLoadError naming the view file when it is invalid.
+// if it exists (a scene file of that name, with "meshes", is not a view file). Throws SceneLoadError naming the view file when it is invalid.
 void apply_sibling_view_file(const std::string& mesh_path, View& view);
 
 }  // namespace raylab

@@ -102,6 +102,9 @@ TEST(SceneFile, MaterialsCameraBackgroundAndRelativeFiles) {
   EXPECT_TRUE(near(s.background, Vec3f(0.1f, 0.2f, 0.3f)));
   // load_scene dispatches .json paths here.
   EXPECT_EQ(load_scene(path).num_triangles(), 15u);
+  // A scene file named like its mesh (tri.json beside tri.obj) is not taken for the mesh's view file.
+  const std::string same = test::write_file(dir / "models", "tri.json", R"({"meshes": [{"file": "tri.obj"}]})");
+  EXPECT_EQ(load_scene(same).num_triangles(), 1u);
 }
 
 TEST(SceneFile, DefaultsFrameTheSceneAndLightItWithASkyUnlessItEmits) {
