@@ -297,6 +297,13 @@ class SceneFileReader {
       if (xf.linear().determinant() < 0.0f)
         for (auto& t : part.mesh.triangles) std::swap(t[1], t[2]);  // keep front faces in front
     }
+    if (scene.mesh.vertices.empty() && scene.mesh.triangles.empty() && scene.materials.empty()) {
+      // The first mesh moves in whole: a one-mesh scene file costs no copy.
+      scene.mesh = std::move(part.mesh);
+      scene.materials = std::move(part.materials);
+      scene.material_ids = std::move(part.material_ids);
+      return;
+    }
     const auto vertex_base = static_cast<uint64_t>(scene.mesh.num_vertices());
     const auto material_base = static_cast<uint32_t>(scene.materials.size());
     if (vertex_base + part.mesh.num_vertices() >= 0xFFFFFFFFull) fail(ptr, "the scene has more vertices than 32-bit indices can address");
@@ -306,7 +313,6 @@ class SceneFileReader {
       scene.mesh.triangles.push_back({static_cast<uint32_t>(vertex_base + t[0]), static_cast<uint32_t>(vertex_base + t[1]),
                                       static_cast<uint32_t>(vertex_base + t[2])});
     scene.materials.insert(scene.materials.end(), part.materials.begin(), part.materials.end());
-    scene.material_ids.reserve(scene.material_ids.size() + part.material_ids.size());
     for (uint32_t id : part.material_ids) scene.material_ids.push_back(material_base + id);
   }
 
