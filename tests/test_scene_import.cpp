@@ -138,6 +138,17 @@ TEST(SceneImport, GltfMergesMeshesWithNodeTransformsAndMaterials) {
   const Scene b = load_mesh_file(test::write_file(dir, "m.glb", test::glb({quad})));
   EXPECT_EQ(b.num_triangles(), 2u);
   EXPECT_EQ(b.bounds().hi, Vec3f(1, 1, 0));
+
+  // An external .bin buffer beside the .gltf; the index check reads it there.
+  std::string buffer;
+  nlohmann::json doc = test::gltf_document({quad, light}, buffer);
+  doc["buffers"][0]["uri"] = "ext.bin";
+  test::write_file(dir, "ext.bin", buffer);
+  EXPECT_EQ(load_mesh_file(test::write_file(dir, "ext.gltf", doc.dump())).num_triangles(), 3u);
+  test::write_file(dir, "ext.bin", buffer.substr(0, buffer.size() - 4));
+  EXPECT_THAT(test::load_error(dir / "ext.gltf"), HasSubstr("truncated"));
+  std::filesystem::remove(dir / "ext.bin");
+  EXPECT_THAT(test::load_error(dir / "ext.gltf"), HasSubstr("cannot read the buffer file"));
 }
 
 const char* kNff =
