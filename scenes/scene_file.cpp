@@ -254,6 +254,7 @@ class SceneFileReader {
         const std::string pp = child(ptr, "params");
         if (!m["params"].is_object()) fail(pp, "expected an object of parameters, got " + type_name(m["params"]));
         for (const auto& [key, value] : m["params"].items()) {
+          if (key == "comment") continue;
           if (spec.params.count(key)) fail(child(pp, key), "given both here and in the generator spec");
           spec.params[key] = param_text(value, child(pp, key));
         }
