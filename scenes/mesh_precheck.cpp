@@ -313,6 +313,7 @@ class ObjChecker {
 
   void check_vertex(const char* p, const char* end) {
     int numbers = 0;
+    double w = 1.0;
     for (p = skip_blanks(p, end); p < end; p = skip_blanks(p, end)) {
       const char* t = token_end(p, end);
       const std::string_view token(p, static_cast<size_t>(t - p));
@@ -331,10 +332,18 @@ class ObjChecker {
       if (ec == std::errc::result_out_of_range ? std::abs(std::strtod(std::string(num, t).c_str(), nullptr)) > 1.0
                                                : !std::isfinite(static_cast<float>(x)))
         fail(line_no_, fmt::format("vertex {} has a non-finite coordinate '{}'", vertices_ + 1, token));
+      if (numbers == 3) w = x;
       ++numbers;
       p = t;
     }
     if (numbers < 3) fail(line_no_, fmt::format("vertex {} needs 3 numbers, has {}", vertices_ + 1, numbers));
+    // "v x y z w": the OBJ format makes w a weight of rational curves, but
+    // Assimp 5.2 divides x, y and z by it; rather than a silently distorted
+    // mesh, say so. (Six numbers are x y z and a colour: fine.)
+    if (numbers == 4 && w != 1.0)
+      fail(line_no_, fmt::format("vertex {} has a 4th (w) component {}, by which the importer (Assimp 5.2) would divide "
+                                 "its coordinates (in OBJ, w only weights rational curves); remove it",
+                                 vertices_ + 1, w));
   }
 
   void check_face(const char* p, const char* end, uint64_t& max_index, uint64_t& max_index_line) {

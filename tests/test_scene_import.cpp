@@ -42,6 +42,13 @@ TEST(SceneImport, ObjMtlGivesDiffuseAndEmissionPerTriangle) {
   EXPECT_LT(s.background.maxCoeff(), 0.1f);
 }
 
+TEST(SceneImport, ObjVertexExtrasWithoutEffectOnPositions) {
+  // "v x y z 1" (w = 1) and "v x y z r g b" (a colour) keep the positions as written.
+  const auto dir = test::temp_dir("import_obj_extras");
+  const Scene s = load_mesh_file(test::write_file(dir, "x.obj", "v 0 0 0 1\nv 2 0 0 0.5 0.5 0.5\nv 0 3 0 1.0\nf 1 2 3\n"));
+  EXPECT_EQ(s.bounds().hi, Vec3f(2, 3, 0));
+}
+
 TEST(SceneImport, FilesWithoutMaterialsGetDefaultGreyAndASky) {
   const auto dir = test::temp_dir("import_grey");
   const Scene s = load_mesh_file(test::write_file(dir, "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));

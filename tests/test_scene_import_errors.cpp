@@ -45,6 +45,7 @@ std::vector<BadFile> bad_files() {
   c.push_back({"bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 b 3\n", "not a vertex index"});
   c.push_back({"lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n", "no triangles"});
   c.push_back({"leading_dot.obj", "v .5 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "decimal point"});
+  c.push_back({"w_component.obj", "v 0 0 0\nv 1 0 0 0.5\nv 0 1 0\nf 1 2 3\n", "4th (w) component 0.5"});
   c.push_back({"utf16.obj", std::string("\xFF\xFEv\0 \0", 6), "UTF-16"});
   // PLY, ASCII
   c.push_back({"empty.ply", "", "file is empty"});
