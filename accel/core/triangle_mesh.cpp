@@ -37,7 +37,8 @@ void TriangleMesh::validate() const {
 void TriangleMesh::append(const TriangleMesh& other) {
   const auto offset = static_cast<uint32_t>(vertices.size());
   vertices.insert(vertices.end(), other.vertices.begin(), other.vertices.end());
-  triangles.reserve(triangles.size() + other.triangles.size());
+  // No reserve here: reserving the exact size on every call would defeat the
+  // vector's geometric growth and make many small appends quadratic.
   for (const auto& t : other.triangles) triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
 
