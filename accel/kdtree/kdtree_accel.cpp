@@ -25,14 +25,18 @@ class KdTreeAccel final : public Accelerator {
     Timer timer;
     KdTree tree = builder_ == KdBuilder::Sah ? build_kdtree_sah(mesh, opt_) : build_kdtree_median(mesh, opt_);
     nodes_ = std::move(tree.nodes);
-    tris_.resize(tree.prim_ids.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint32_t id = tree.prim_ids[i];
-        tris_[i] = KdLeafTriangle{mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2), id};
+    std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
+    tris_.clear();
+    ids_.resize(tree.prim_ids.size());
+    for (size_t i = 0; i < tree.prim_ids.size(); ++i) {
+      const uint32_t id = tree.prim_ids[i];
+      if (slot[id] == UINT32_MAX) {
+        slot[id] = static_cast<uint32_t>(tris_.size());
+        tris_.push_back(KdLeafTriangle{mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2), id});
       }
-    });
-    view_ = KdTreeView{nodes_.data(), tris_.data(), tree.bounds, mesh.num_triangles() == 0};
+      ids_[i] = slot[id];
+    }
+    view_ = KdTreeView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0};
 
     BuildStats s;
     s.build_ms = timer.ms();
@@ -43,7 +47,7 @@ class KdTreeAccel final : public Accelerator {
     s.max_depth = shape.max_depth;
     s.avg_depth = shape.avg_leaf_depth;
     s.sah_cost = shape.sah_cost;
-    s.bytes = nodes_.size() * sizeof(KdNode) + tris_.size() * sizeof(KdLeafTriangle);
+    s.bytes = nodes_.size() * sizeof(KdNode) + tris_.size() * sizeof(KdLeafTriangle) + ids_.size() * sizeof(uint32_t);
     s.extra["inner_nodes"] = static_cast<double>(shape.inner);
     s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
     s.extra["references"] = static_cast<double>(shape.references);
@@ -84,6 +88,7 @@ class KdTreeAccel final : public Accelerator {
   TriangleTest test_;
   std::vector<KdNode> nodes_;
   std::vector<KdLeafTriangle> tris_;
+  std::vector<uint32_t> ids_;
   KdTreeView view_;
 };
 

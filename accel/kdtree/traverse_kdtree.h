@@ -51,7 +51,8 @@ struct KdLeafTriangle {
 
 struct KdTreeView {
   const KdNode* nodes = nullptr;
-  const KdLeafTriangle* tris = nullptr;  // indexed by leaf offsets
+  const KdLeafTriangle* tris = nullptr;
+  const uint32_t* ids = nullptr;  // leaf ranges of indices into tris
   Aabb bounds;
   bool empty = true;
 };
@@ -131,19 +132,20 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       const uint32_t far = n.child() + 1u - neg[k];
       const bool visit_near = !(ts_hi < t0);
       const bool visit_far = !(ts_lo > t1);
-      if (visit_near && visit_far) {
-        stack[sp++] = Entry{far, ts_lo > t0 ? ts_lo : t0, t1};
-        t1 = ts_hi < t1 ? ts_hi : t1;
-        node = near;
-      } else {
-        node = visit_near ? near : far;
-      }
+      // Branch-free: the far entry is always written but only kept when
+      // both children are visited. With one child only the interval stays
+      // as it is (the padded plane lies outside it).
+      stack[sp] = Entry{far, ts_lo > t0 ? ts_lo : t0, t1};
+      sp += (visit_near && visit_far) ? 1 : 0;
+      t1 = (visit_near && ts_hi < t1) ? ts_hi : t1;
+      node = visit_near ? near : far;
       n = tree.nodes[node];
     }
 
     if constexpr (kCount) stats->nodes_visited++;
-    const KdLeafTriangle* tri = tree.tris + n.offset();
-    for (uint32_t i = 0, count = n.count(); i < count; ++i, ++tri) {
+    const uint32_t* id = tree.ids + n.offset();
+    for (uint32_t i = 0, count = n.count(); i < count; ++i) {
+      const KdLeafTriangle* tri = tree.tris + id[i];
       if constexpr (kCount) stats->triangle_tests++;
       float t, u, v;
       if (pre.intersect(ray, tri->p0, tri->p1, tri->p2, ray.tmin, best_t, t, u, v)) {
