@@ -16,6 +16,12 @@
 // Planar triangles lying in a candidate plane are put on the side that gives
 // the lower cost; a cell of zero width ("flat cell") is allowed only when it
 // holds such planar triangles, never empty, and gets no empty-space bonus.
+//
+// Termination: a leaf when no plane is cheaper than testing every triangle
+// (C_leaf = K_I N), at the depth limit, or when a split would reduce neither
+// side. Candidate planes leaving more than half of the cell's triangles
+// straddling are skipped (a guard of this implementation against reference
+// blow-up in flat cells of overlapping coplanar triangles).
 // Subtrees are built as parallel TBB tasks.
 #include "accel/core/triangle_mesh.h"
 #include "accel/kdtree/kd_build_options.h"

@@ -83,7 +83,12 @@ class MedianBuilder {
         nl += l;
         nr += rt;
       }
-      if (nl < n || nr < n) {
+      // Progress: an empty side (empty space cut off), or fewer triangles on
+      // both sides with at most half of them straddling. Without the second
+      // rule a cell of overlapping or duplicated triangles next to a few
+      // small ones would copy the overlapping ones into both children at
+      // every level (exponential in depth).
+      if (nl == 0 || nr == 0 || (nl < n && nr < n && 2 * (nl + nr) <= 3 * n)) {
         axis = k;
         split = p;
         break;
@@ -108,7 +113,8 @@ class MedianBuilder {
         right.push_back(r);
       }
     }
-    if (left.size() >= n && right.size() >= n) return make_leaf(node, refs);
+    // Clipping only removes references, so the rule above still holds.
+    if ((left.size() >= n && !right.empty()) || (right.size() >= n && !left.empty())) return make_leaf(node, refs);
     std::vector<PrimRef>().swap(refs);
 
     const uint32_t pair = writer_.allocate_pair();
