@@ -78,7 +78,7 @@ Scene make_coplanar_scene(size_t n, int grid, int axis, uint64_t seed) {
     p[(axis + 2) % 3] = v;
     return p;
   };
-  for (int j = 0; j <= grid; ++j)
+  for (int j = 0; grid > 0 && j <= grid; ++j)
     for (int i = 0; i <= grid; ++i)
       s.mesh.vertices.push_back(point(static_cast<float>(i) / grid, static_cast<float>(j) / grid));
   auto vid = [grid](int i, int j) { return static_cast<uint32_t>(j * (grid + 1) + i); };

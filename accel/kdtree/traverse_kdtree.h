@@ -3,40 +3,50 @@
 // traversal algorithm (Jansen 1986; Arvo; Havran's thesis, 2000, "TA_rec"),
 // written with distances along the ray instead of entry/exit points.
 //
-// The ray's [tmin, tmax] is first clipped to the root cell (conservative slab
-// test of Ize 2013, accel/core/slab_test.h). At an inner node the distance
-// t_split to the split plane decides: the child on the ray's origin side
-// ("near") covers t < t_split, the other ("far") t > t_split; when both are
-// crossed, far is pushed with its interval and near is visited first.
+// The ray's [tmin, tmax] is first clipped to the root cell (a slab test). At
+// an inner node the distance to the split plane decides: the child on the
+// ray's origin side ("near") is crossed before the plane, the other ("far")
+// after it; when both are crossed, far is pushed with its interval and near
+// is visited first.
 //
-// Robustness, so float rounding never skips a cell the ray really crosses:
-//  - t_split has a relative error of at most gamma(3) (subtraction, rounded
-//    reciprocal, product); both children are given intervals padded by twice
-//    that, so neighbouring cells overlap slightly at their common plane
-//    instead of leaving a gap.
-//  - Rays parallel to a split plane (direction component +0 or -0) get
-//    t_split = +-inf from IEEE division and visit the side of their origin; a
-//    ray lying in the plane itself gets NaN and visits both children with the
-//    full interval (all comparisons below are written so NaN means "visit").
-//    Denormal components, whose reciprocal overflows, are treated the same
-//    conservative way.
-//  - Triangles are tested on the ray's whole remaining segment
-//    [tmin, closest hit so far], not just the leaf's. A hit is accepted as
-//    the answer once no cell left on the stack begins before it: a hit inside
-//    the current leaf's (padded) interval ends the traversal, while a hit
-//    beyond the leaf (the triangle reaches into later cells) is kept as a
-//    bound and the traversal goes on only through cells that start before
-//    it. This is the leaf-interval rule of the classic algorithm without its
-//    risk of rejecting a real hit a rounding error away from the leaf.
+// Robustness. Every cell, the root included, is treated as inflated by a
+// margin delta = 2^-20 M in space, where M bounds |p - org| over the root
+// cell (M is per ray). This is Ize's conservative slab test (JCGT 2013) with
+// the padding put on positions instead of on distances, which covers two
+// kinds of error with one rule:
+//  - the traversal's own rounding: (s - org) and the product with the
+//    reciprocal are off by at most 2 ulp(M) in position, well inside delta;
+//  - the triangle test's resolution: the watertight test (Woop et al. 2013)
+//    decides on sheared float coordinates of p - org, i.e. on a triangle
+//    moved by a few ulp(M), so it can report a hit on a ray passing a few
+//    ulp(M) beside a triangle, or a distance off by a few ulp(M)/|dir|. The
+//    cell holding such a triangle is still within delta of the ray and is
+//    visited, and [tmin, tmax] is widened by delta / max|dir| for the same
+//    reason. So the traversal finds every hit the triangle test would report
+//    when testing all triangles (the tests check this bit for bit against
+//    brute force, also for rays in, along and one ulp beside split planes).
+// Rays parallel to a split plane (direction component +0 or -0) get +-inf
+// from IEEE division and visit the side(s) within delta of their origin; a
+// NaN (a ray exactly on an inflated plane, or a denormal component whose
+// reciprocal overflows) visits both children with the full interval: every
+// comparison below is written so that NaN means "visit".
+//
+// Hit acceptance: triangles are tested on the ray's remaining segment
+// [tmin, closest hit so far], not just on the leaf's interval. A hit is the
+// answer once no cell left on the stack begins before it: a hit inside the
+// current leaf's interval ends the traversal, as in the classic algorithm,
+// while a hit beyond the leaf (the triangle reaches into later cells) is
+// kept as a bound and the traversal goes on only through cells that start
+// before it, instead of being rejected and found again later.
 // Closest hit and any hit are one routine (kAnyHit returns at the first hit);
 // counting is a compile-time switch (kCount).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "accel/accelerator.h"
 #include "accel/core/intersect_triangle.h"
-#include "accel/core/slab_test.h"
 #include "accel/kdtree/kdtree_node.h"
 
 namespace raylab {
@@ -57,10 +67,8 @@ struct KdTreeView {
   bool empty = true;
 };
 
-// Relative padding of split distances and of the root entry distance.
-inline constexpr float kKdPad = 4.0f * kFloatGamma3;
-inline constexpr float kKdPadUp = 1.0f + kKdPad;
-inline constexpr float kKdPadDown = 1.0f - kKdPad;
+// The margin delta as a fraction of M (8 ulps of M).
+inline constexpr float kKdMarginScale = 0x1p-20f;
 
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
@@ -68,37 +76,39 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   if constexpr (kCount) stats->rays++;
   if (tree.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
 
-  // Clip to the root cell. Axes the ray is parallel to only need the origin
-  // inside the slab (the slab test's tiny-reciprocal trick would cut a ray
-  // lying in a face of the cell down to t = 0).
-  const SlabRay sr(ray);
-  float t0 = ray.tmin, t1 = ray.tmax;
+  const Vec3f& org = ray.org;
+  float m = 0.0f, dir_max = 0.0f;
   for (int k = 0; k < 3; ++k) {
-    const float lo = tree.bounds.lo[k], hi = tree.bounds.hi[k];
-    if (ray.dir[k] == 0.0f) {
-      if (ray.org[k] < lo || ray.org[k] > hi) return hit;
-      continue;
-    }
-    const float near_plane = sr.neg[k] ? hi : lo, far_plane = sr.neg[k] ? lo : hi;
-    float tn = (near_plane - ray.org[k]) * sr.inv_dir[k];
-    const float tf = (far_plane - ray.org[k]) * sr.inv_dir[k] * kSlabFarScale;
-    tn = tn >= 0.0f ? tn * kKdPadDown : tn * kKdPadUp;
-    t0 = tn > t0 ? tn : t0;
-    t1 = tf < t1 ? tf : t1;
+    m = std::max(m, std::max(std::fabs(tree.bounds.lo[k] - org[k]), std::fabs(tree.bounds.hi[k] - org[k])));
+    dir_max = std::max(dir_max, std::fabs(ray.dir[k]));
   }
-  if (!(t0 <= t1)) return hit;
+  const float delta = std::max(kKdMarginScale * m, std::numeric_limits<float>::min());
+  const float delta_t = delta / dir_max;
 
-  // Exact IEEE reciprocals for the split planes: +-0 gives +-inf (parallel
-  // rays); a denormal component whose reciprocal overflows gets NaN, which
-  // makes every split along that axis visit both children.
-  float inv[3];
+  // Exact IEEE reciprocals: +-0 gives +-inf (parallel rays); a denormal
+  // component whose reciprocal overflows gets NaN, so every plane along that
+  // axis visits both children. margin[k] moves a plane towards the far side.
+  float inv[3], margin[3];
   uint32_t neg[3];
   for (int k = 0; k < 3; ++k) {
     const float d = ray.dir[k];
     inv[k] = 1.0f / d;
     if (d != 0.0f && std::isinf(inv[k])) inv[k] = std::numeric_limits<float>::quiet_NaN();
     neg[k] = std::signbit(d) ? 1u : 0u;
+    margin[k] = neg[k] ? -delta : delta;
   }
+
+  // Clip [tmin, tmax] (widened) to the inflated root cell.
+  float t0 = ray.tmin - delta_t, t1 = ray.tmax + delta_t;
+  for (int k = 0; k < 3; ++k) {
+    const float near_plane = neg[k] ? tree.bounds.hi[k] : tree.bounds.lo[k];
+    const float far_plane = neg[k] ? tree.bounds.lo[k] : tree.bounds.hi[k];
+    const float tn = ((near_plane - org[k]) - margin[k]) * inv[k];
+    const float tf = ((far_plane - org[k]) + margin[k]) * inv[k];
+    t0 = tn > t0 ? tn : t0;
+    t1 = tf < t1 ? tf : t1;
+  }
+  if (!(t0 <= t1)) return hit;
 
   const TrianglePrecompute<kTest> pre(ray);
   float best_t = ray.tmax;
@@ -117,27 +127,22 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
     while (!n.is_leaf()) {
       if constexpr (kCount) stats->nodes_visited++;
       const int k = n.axis();
-      const float ts = (n.split() - ray.org[k]) * inv[k];
-      float ts_lo, ts_hi;  // NaN stays NaN
-      if (ts >= 0.0f) {
-        ts_lo = ts * kKdPadDown;
-        ts_hi = ts * kKdPadUp;
-      } else {
-        ts_lo = ts * kKdPadUp;
-        ts_hi = ts * kKdPadDown;
-      }
+      const float rel = n.split() - org[k];
+      // Where the ray leaves the (inflated) near child and enters the far one.
+      const float t_near_end = (rel + margin[k]) * inv[k];
+      const float t_far_start = (rel - margin[k]) * inv[k];
       // Below child = child(), above = child() + 1; a ray going down (sign
-      // bit set, -0 included) is above the plane before t_split.
+      // bit set, -0 included) is above the plane first.
       const uint32_t near = n.child() + neg[k];
       const uint32_t far = n.child() + 1u - neg[k];
-      const bool visit_near = !(ts_hi < t0);
-      const bool visit_far = !(ts_lo > t1);
+      const bool visit_near = !(t_near_end < t0);
+      const bool visit_far = !(t_far_start > t1);
       // Branch-free: the far entry is always written but only kept when
       // both children are visited. With one child only the interval stays
       // as it is (the padded plane lies outside it).
-      stack[sp] = Entry{far, ts_lo > t0 ? ts_lo : t0, t1};
+      stack[sp] = Entry{far, t_far_start > t0 ? t_far_start : t0, t1};
       sp += (visit_near && visit_far) ? 1 : 0;
-      t1 = (visit_near && ts_hi < t1) ? ts_hi : t1;
+      t1 = (visit_near && t_near_end < t1) ? t_near_end : t1;
       node = visit_near ? near : far;
       n = tree.nodes[node];
     }
@@ -158,14 +163,15 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
     }
 
     // Next cell that can still hold a closer hit; cells starting beyond the
-    // closest hit so far are dropped.
+    // closest hit so far (plus the test's distance error) are dropped.
+    const float t_bound = best_t + delta_t;
     while (true) {
       if (sp == 0) return hit;
       const Entry& e = stack[--sp];
-      if (e.t0 <= best_t) {
+      if (e.t0 <= t_bound) {
         node = e.node;
         t0 = e.t0;
-        t1 = e.t1 < best_t ? e.t1 : best_t;
+        t1 = e.t1 < t_bound ? e.t1 : t_bound;
         break;
       }
     }
