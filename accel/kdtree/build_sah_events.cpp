@@ -22,8 +22,8 @@ namespace {
 
 // Event types in the order the sweep needs at equal positions: triangles
 // ending at p leave the right side before p is evaluated, planar ones are
-// counted at p, starting ones join the left side after p (Wald & Havran,
-// sec. 4.2: "-" < "|" < "+").
+// counted at p, starting ones join the left side after p (the order of
+// Wald & Havran: end < planar < start).
 constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
 constexpr uint32_t kTriMask = (1u << 30) - 1;
 
@@ -183,7 +183,7 @@ class SahEventBuilder {
     writer_.set_leaf(node, prims);
   }
 
-  // One sweep over the sorted events of axis k (Wald & Havran, algorithm 5).
+  // One sweep over the sorted events of axis k (the incremental SAH sweep of Wald & Havran).
   SplitPlane sweep_axis(const Aabb& cell, const NodeEvents& ev, int k) const {
     SplitPlane best;
     const float lo = cell.lo[k], hi = cell.hi[k];
@@ -246,7 +246,7 @@ class SahEventBuilder {
   }
 
   // Marks every triangle of the node left only, right only or both, from the
-  // events of the split axis (Wald & Havran, algorithm 6).
+  // events of the split axis alone (Wald & Havran's classification step).
   static void classify(const EventList& e, const SplitPlane& s, uint8_t* side) {
     for (const Event& x : e)
       if (x.type() != kEnd) side[x.tri()] = kBoth;

@@ -83,12 +83,13 @@ class MedianBuilder {
         nl += l;
         nr += rt;
       }
-      // Progress: an empty side (empty space cut off), or fewer triangles on
-      // both sides with at most half of them straddling. Without the second
-      // rule a cell of overlapping or duplicated triangles next to a few
-      // small ones would copy the overlapping ones into both children at
-      // every level (exponential in depth).
-      if (nl == 0 || nr == 0 || (nl < n && nr < n && 2 * (nl + nr) <= 3 * n)) {
+      // Progress: at least one side loses a triangle, and less than half of
+      // them straddle the plane. Without the second rule a cell of
+      // overlapping or duplicated triangles next to a few small ones would
+      // copy the overlapping ones into both children at every level
+      // (exponential in depth); a few large triangles spanning a cell whose
+      // other triangles all lie on one side do not stop the split.
+      if ((nl < n || nr < n) && 2 * (nl + nr) < 3 * n) {
         axis = k;
         split = p;
         break;
@@ -113,8 +114,8 @@ class MedianBuilder {
         right.push_back(r);
       }
     }
-    // Clipping only removes references, so the rule above still holds.
-    if ((left.size() >= n && !right.empty()) || (right.size() >= n && !left.empty())) return make_leaf(node, refs);
+    // A guard only: clipping removes references, so the rule above holds.
+    if (left.size() >= n && right.size() >= n) return make_leaf(node, refs);
     std::vector<PrimRef>().swap(refs);
 
     const uint32_t pair = writer_.allocate_pair();

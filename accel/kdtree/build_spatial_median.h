@@ -2,8 +2,8 @@
 // Baseline k-d tree builder for the study: every cell is split in the middle
 // of its longest axis (the classic spatial median, no cost model), until it
 // holds at most `median_leaf_size` triangles, reaches the depth limit, or no
-// axis makes progress: one side empty (empty space cut off), or fewer
-// triangles on both sides with at most half of them straddling. Straddling
+// axis makes progress: fewer triangles on at least one side, with less than
+// half of them straddling the plane (no reference blow-up). Straddling
 // triangles are clipped to the children like the SAH builder's (perfect
 // splits, or boxes with clip=0).
 #include "accel/core/triangle_mesh.h"

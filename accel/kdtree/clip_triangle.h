@@ -1,6 +1,6 @@
 #pragma once
 // Bounds of the part of a triangle inside a box, for "perfect splits"
-// (Havran's thesis, 2000, sec. 4.5; Wald & Havran 2006, sec. 4.3): a triangle
+// (Havran's thesis, 2000; Wald & Havran 2006): a triangle
 // that straddles a split plane is clipped to each child cell, and the child's
 // split candidates come from the clipped polygon's bounds rather than from the
 // triangle's bounding box. Triangles whose box overlaps a cell but whose
