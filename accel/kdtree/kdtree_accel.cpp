@@ -25,6 +25,10 @@ class KdTreeAccel final : public Accelerator {
     Timer timer;
     KdTree tree = builder_ == KdBuilder::Sah ? build_kdtree_sah(mesh, opt_) : build_kdtree_median(mesh, opt_);
     nodes_ = std::move(tree.nodes);
+    // Each referenced triangle is copied once, in the order the leaves first
+    // use it (neighbouring leaves share cache lines), and leaves keep indices
+    // into that array. On the bunny (5.3 references per triangle) this was
+    // faster than one copy per reference, with half the memory.
     std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
     tris_.clear();
     ids_.resize(tree.prim_ids.size());

@@ -51,9 +51,8 @@
 
 namespace raylab {
 
-// Triangle vertices copied in leaf order next to their original ids, so a
-// leaf's triangles are contiguous (a triangle in several leaves is copied
-// once per leaf).
+// Triangle vertices copied next to their original ids (once per triangle, in
+// the order the leaves first refer to them).
 struct KdLeafTriangle {
   Vec3f p0, p1, p2;
   uint32_t prim;
@@ -62,7 +61,7 @@ struct KdLeafTriangle {
 struct KdTreeView {
   const KdNode* nodes = nullptr;
   const KdLeafTriangle* tris = nullptr;
-  const uint32_t* ids = nullptr;  // leaf ranges of indices into tris
+  const uint32_t* ids = nullptr;  // leaf ranges [offset, offset + count) of indices into tris
   Aabb bounds;
   bool empty = true;
 };
