@@ -97,6 +97,12 @@ constexpr size_t kParallelTaskSize = 1024;
 // Triangles in a node from which its three axes are swept and split in parallel.
 constexpr size_t kParallelNodeSize = 65536;
 
+struct Scratch {
+  std::vector<uint8_t> side;
+  std::vector<uint32_t> straddling, prims;
+  EventList new_left[3], new_right[3];
+};
+
 class SahEventBuilder {
  public:
   SahEventBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
@@ -147,7 +153,8 @@ class SahEventBuilder {
     if (best.axis < 0 || !(best.cost < static_cast<double>(opt_.intersection_cost) * static_cast<double>(n)))
       return make_leaf(node, ev);
 
-    std::vector<uint8_t>& side = sides_.local();
+    Scratch& scratch = scratch_.local();
+    std::vector<uint8_t>& side = scratch.side;
     if (side.size() < mesh_.num_triangles()) side.resize(mesh_.num_triangles());
     classify(ev.axis[best.axis], best, side.data());
 
@@ -155,7 +162,7 @@ class SahEventBuilder {
     left_cell.hi[best.axis] = best.pos;
     right_cell.lo[best.axis] = best.pos;
     NodeEvents left, right;
-    split_events(ev, best, side.data(), left_cell, right_cell, left, right);
+    split_events(ev, best, scratch, left_cell, right_cell, left, right);
     // No progress on either side (possible only with degenerate costs):
     // stop rather than recurse on the same triangles.
     if (left.triangles >= n && right.triangles >= n) return make_leaf(node, ev);
@@ -173,8 +180,8 @@ class SahEventBuilder {
   }
 
   void make_leaf(uint32_t node, const NodeEvents& ev) {
-    std::vector<uint32_t> prims;
-    prims.reserve(ev.triangles);
+    std::vector<uint32_t>& prims = scratch_.local().prims;
+    prims.clear();
     for (const Event& e : ev.axis[0])
       if (e.type() != kEnd) prims.push_back(e.tri());
     // Ascending ids: among hits at exactly the same distance the lowest id
@@ -270,10 +277,12 @@ class SahEventBuilder {
     return clip_triangle_to_cell(mesh_.vertex(tri, 0), mesh_.vertex(tri, 1), mesh_.vertex(tri, 2), cell, out);
   }
 
-  void split_events(const NodeEvents& ev, const SplitPlane& s, const uint8_t* side, const Aabb& left_cell,
+  void split_events(const NodeEvents& ev, const SplitPlane& s, Scratch& scratch, const Aabb& left_cell,
                     const Aabb& right_cell, NodeEvents& left, NodeEvents& right) const {
+    const uint8_t* side = scratch.side.data();
     size_t left_only = 0, right_only = 0;
-    std::vector<uint32_t> straddling;
+    std::vector<uint32_t>& straddling = scratch.straddling;
+    straddling.clear();
     for (const Event& x : ev.axis[s.axis]) {
       if (x.type() == kEnd) continue;
       switch (side[x.tri()]) {
@@ -283,7 +292,12 @@ class SahEventBuilder {
       }
     }
     // Straddling triangles get fresh events from their part in each child.
-    EventList new_left[3], new_right[3];
+    EventList* new_left = scratch.new_left;
+    EventList* new_right = scratch.new_right;
+    for (int k = 0; k < 3; ++k) {
+      new_left[k].clear();
+      new_right[k].clear();
+    }
     left.triangles = left_only;
     right.triangles = right_only;
     for (const uint32_t tri : straddling) {
@@ -327,10 +341,12 @@ class SahEventBuilder {
   KdBuildOptions opt_;
   int max_depth_ = 0;
   std::vector<Aabb> tri_boxes_;
-  // One classification array per thread, indexed by triangle id (the paper's
-  // per-triangle flag). Only touched between classify and split_events of one
-  // node, with no task switch in between (see the isolated regions).
-  tbb::enumerable_thread_specific<std::vector<uint8_t>> sides_;
+  // Per-thread working memory, reused from node to node: the classification
+  // array indexed by triangle id (the paper's per-triangle flag) and the
+  // lists of straddling triangles and their new events. Only touched between
+  // classify and the end of split_events (or in make_leaf) of one node, with
+  // no task switch in between (see the isolated regions).
+  tbb::enumerable_thread_specific<Scratch> scratch_;
   KdTreeWriter writer_;
 };
 

@@ -12,7 +12,9 @@
 // box (both exact bounds of the true clipped part). The bounds are therefore
 // never smaller than the true intersection, so no cell loses a triangle that
 // really reaches into it. A vertex exactly on a cell face counts as inside.
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "accel/core/aabb.h"
@@ -22,16 +24,26 @@ namespace raylab {
 
 namespace kd_detail {
 
+// The next float towards -inf / +inf of a finite float (std::nextafter
+// without the library call).
+inline float next_down(float f) {
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const uint32_t b = std::bit_cast<uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? b - 1 : b + 1);
+}
+inline float next_up(float f) { return -next_down(-f); }
+
+// Double to float, rounded outward, plus one more ulp of margin.
 inline float round_down(double x) {
   float f = static_cast<float>(x);
-  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-  return std::nextafter(f, -std::numeric_limits<float>::infinity());
+  if (static_cast<double>(f) > x) f = next_down(f);
+  return next_down(f);
 }
 
 inline float round_up(double x) {
   float f = static_cast<float>(x);
-  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-  return std::nextafter(f, std::numeric_limits<float>::infinity());
+  if (static_cast<double>(f) < x) f = next_up(f);
+  return next_up(f);
 }
 
 }  // namespace kd_detail
@@ -65,6 +77,8 @@ inline bool clip_triangle_to_cell(const Vec3f& a, const Vec3f& b, const Vec3f& c
   int n = 3, cur = 0;
   for (int axis = 0; axis < 3; ++axis) {
     for (int side = 0; side < 2; ++side) {
+      // Faces the whole triangle is inside of clip nothing.
+      if (side == 0 ? tri_box.lo[axis] >= cell.lo[axis] : tri_box.hi[axis] <= cell.hi[axis]) continue;
       const double plane = side == 0 ? cell.lo[axis] : cell.hi[axis];
       const Vec3d* in = buf[cur];
       Vec3d* dst = buf[1 - cur];
