@@ -5,9 +5,10 @@
 // agreement with Embree (through the double-precision oracle of `verify`).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
-#include <set>
 #include <thread>
 
 #include "accel/kdtree/build_sah_events.h"
