@@ -30,15 +30,17 @@ void print_build_stats(const Scene& s, const std::string& accel_list, int repeat
 
 Runner add_info(CLI::App& app) {
   auto scene_spec = std::make_shared<std::string>("cornell");
+  auto positional = std::make_shared<std::string>();
   auto accel_list = std::make_shared<std::string>();
   auto repeats = std::make_shared<int>(1);
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
-  cmd->add_option("--scene", *scene_spec, "procedural scene spec or mesh file")->capture_default_str();
+  auto* scene_opt = cmd->add_option("--scene", *scene_spec, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
+  cmd->add_option("scene", *positional, "the scene, as for --scene")->excludes(scene_opt);
   cmd->add_option("--accel", *accel_list, "also build these accelerators and print their build figures");
   cmd->add_option("--build-repeats", *repeats, "builds per accelerator (median reported)")->check(CLI::Range(1, 100));
-  return [scene_spec, accel_list, repeats]() {
+  return [scene_spec, positional, accel_list, repeats]() {
     Timer t;
-    const Scene s = load_scene(*scene_spec);
+    const Scene s = load_scene(positional->empty() ? *scene_spec : *positional);
     const double ms = t.ms();
     const Aabb b = s.bounds();
     size_t emitters = 0;

@@ -16,14 +16,16 @@ namespace raylab::cli {
 
 Runner add_render(CLI::App& app) {
   struct Opts {
-    std::string scene = "cornell", accel = "bvh", size, out;
+    std::string scene = "cornell", positional_scene, accel = "bvh", size, out;
     int spp = 64, threads = 0, max_depth = 64;
     uint64_t seed = 1;
     bool quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("render", "path-trace a scene to PNG (or PFM)");
-  cmd->add_option("--scene", o->scene, "procedural scene spec or mesh file")->capture_default_str();
+  auto* scene_opt = cmd->add_option("--scene", o->scene, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
+  cmd->add_option("scene", o->positional_scene, "the scene, as for --scene (e.g. scenes/examples/cornell_flake.json)")
+      ->excludes(scene_opt);
   cmd->add_option("--accel", o->accel, "accelerator spec")->capture_default_str();
   cmd->add_option("--spp", o->spp, "samples per pixel")->capture_default_str()->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--size", o->size, "image size WIDTHxHEIGHT (default: the scene's view)");
@@ -39,7 +41,7 @@ Runner add_render(CLI::App& app) {
       limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
     auto accel = make_accelerator(o->accel);  // check the spec before loading a large scene
     Timer load;
-    const Scene scene = load_scene(o->scene);
+    const Scene scene = load_scene(o->positional_scene.empty() ? o->scene : o->positional_scene);
     const double load_ms = load.ms();
     RenderSettings rs;
     rs.width = scene.view.width;

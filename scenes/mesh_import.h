@@ -16,9 +16,18 @@ class SceneLoadError : public std::runtime_error {
 };
 
 // Loads a mesh file into a scene with a default camera framing its bounds and
-// a uniform sky as default light. If a file NAME.json sits next to NAME.ext
-// with a view ("from", "at", "up", "fov_deg", "width", "height", as the SPD
-// scenes have), that view is used.
+// a uniform sky as default light. The camera comes, by priority, from
+//   1. a file NAME.json next to NAME.ext with a view ("from", "at", "up",
+//      "fov_deg", "width", "height"), as the SPD scenes in ../shared have;
+//   2. the view record of an NFF file (from, at, up, angle, resolution);
+//   3. frame_bounds() of the mesh.
+// Materials: diffuse colour and emission where the file gives them (OBJ/MTL
+// Kd and Ke, glTF baseColorFactor and emissiveFactor, NFF fill colour), a
+// default grey otherwise. Every error names the file and what is wrong.
 Scene load_mesh_file(const std::string& path);
+
+// The view file next to a mesh (NAME.json for NAME.ext), applied to `view`
+// if it exists (a scene file of that name, with "meshes", is not a view file). Throws SceneLoadError naming the view file when it is invalid.
+void apply_sibling_view_file(const std::string& mesh_path, View& view);
 
 }  // namespace raylab

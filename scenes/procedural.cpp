@@ -1,4 +1,5 @@
 #include "scenes/procedural.h"
+#include "scenes/library.h"
 
 #include <algorithm>
 #include <cmath>
@@ -132,8 +133,9 @@ TriangleMesh make_uv_sphere(int segments, int rings, const Vec3f& center, float 
 }
 
 const std::vector<SceneGenerator>& scene_generators() {
-  static const std::vector<SceneGenerator> generators = {
-      {"cornell", "the Cornell box from the published measurements (36 triangles, area light)", {},
+  static const std::vector<SceneGenerator> generators = [] {
+  std::vector<SceneGenerator> list = {
+      {"cornell", "the Cornell box from the published measurements (32 triangles, area light)", {},
        [](const Params&) { return make_cornell_box(); }},
       {"soup", "random triangles in the unit cube",
        {{"n", "10000", "number of triangles"},
@@ -182,6 +184,9 @@ const std::vector<SceneGenerator>& scene_generators() {
          return s;
        }},
   };
+  append_library_generators(list);  // scenes/library_*.cpp
+  return list;
+  }();
   return generators;
 }
 

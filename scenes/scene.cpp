@@ -23,6 +23,18 @@ void Scene::validate() const {
                                   material_ids[i], materials.size()));
 }
 
+std::string view_problem(const View& v) {
+  if (!v.from.allFinite() || !v.at.allFinite() || !v.up.allFinite()) return "camera vectors must be finite";
+  const Vec3f forward = v.at - v.from;
+  if (!(forward.norm() > 0.0f)) return "camera 'from' and 'at' are the same point";
+  if (!(v.up.norm() > 0.0f)) return "camera 'up' is the zero vector";
+  if (!(forward.normalized().cross(v.up.normalized()).norm() > 1e-6f)) return "camera 'up' is parallel to the viewing direction";
+  if (!(v.fov_deg > 0.0f && v.fov_deg < 180.0f)) return fmt::format("field of view {} degrees is outside (0, 180)", v.fov_deg);
+  if (v.width < 1 || v.width > 65536 || v.height < 1 || v.height > 65536)
+    return fmt::format("image size {}x{} is outside 1..65536", v.width, v.height);
+  return "";
+}
+
 View frame_bounds(const Aabb& box, int width, int height, float fov_deg) {
   View v;
   v.width = width;

@@ -47,6 +47,11 @@ struct Scene {
   void validate() const;
 };
 
+// What is wrong with a view (empty if nothing): non-finite vectors, `from`
+// equal to `at`, `up` parallel to the viewing direction, a field of view
+// outside (0, 180) degrees, an image size outside 1..65536.
+std::string view_problem(const View& v);
+
 // A camera looking at the box from a fixed oblique direction (y up), far
 // enough that the bounding sphere fits the vertical field of view.
 View frame_bounds(const Aabb& box, int width = 512, int height = 512, float fov_deg = 45.0f);
