@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -8,13 +9,36 @@
 
 namespace raylab::cli {
 
+// Builds each accelerator `repeats` times and prints the figures of the
+// median build (build time, memory, tree shape and structure-specific extras).
+void print_build_stats(const Scene& s, const std::string& accel_list, int repeats) {
+  for (const auto& spec : expand_accelerator_list(accel_list)) {
+    std::vector<std::pair<double, BuildStats>> runs;
+    for (int i = 0; i < repeats; ++i) {
+      auto accel = make_accelerator(spec);
+      const BuildStats st = accel->build(s.mesh);
+      runs.emplace_back(st.build_ms, st);
+    }
+    std::sort(runs.begin(), runs.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const BuildStats& st = runs[runs.size() / 2].second;
+    std::printf("accel      %s\n  build_ms   %.2f (median of %d)\n  bytes      %zu\n  nodes      %zu\n  leaves     %zu\n"
+                "  max_depth  %d\n  avg_depth  %.2f\n  sah_cost   %.4g\n",
+                spec.c_str(), st.build_ms, repeats, st.bytes, st.nodes, st.leaves, st.max_depth, st.avg_depth, st.sah_cost);
+    for (const auto& [key, value] : st.extra) std::printf("  %-18s %.6g\n", key.c_str(), value);
+  }
+}
+
 Runner add_info(CLI::App& app) {
   auto scene_spec = std::make_shared<std::string>("cornell");
   auto positional = std::make_shared<std::string>();
+  auto accel_list = std::make_shared<std::string>();
+  auto repeats = std::make_shared<int>(1);
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
   auto* scene_opt = cmd->add_option("--scene", *scene_spec, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
   cmd->add_option("scene", *positional, "the scene, as for --scene")->excludes(scene_opt);
-  return [scene_spec, positional]() {
+  cmd->add_option("--accel", *accel_list, "also build these accelerators and print their build figures");
+  cmd->add_option("--build-repeats", *repeats, "builds per accelerator (median reported)")->check(CLI::Range(1, 100));
+  return [scene_spec, positional, accel_list, repeats]() {
     Timer t;
     const Scene s = load_scene(positional->empty() ? *scene_spec : *positional);
     const double ms = t.ms();
@@ -29,6 +53,7 @@ Runner add_info(CLI::App& app) {
     std::printf("view       from (%g, %g, %g) at (%g, %g, %g), fov %g deg, %dx%d\nload       %.1f ms\n", s.view.from.x(),
                 s.view.from.y(), s.view.from.z(), s.view.at.x(), s.view.at.y(), s.view.at.z(), s.view.fov_deg,
                 s.view.width, s.view.height, ms);
+    if (!accel_list->empty()) print_build_stats(s, *accel_list, *repeats);
     return 0;
   };
 }

@@ -1,0 +1,156 @@
+#include "accel/kdtree/build_spatial_median.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
+
+#include "accel/kdtree/clip_triangle.h"
+#include "accel/kdtree/kd_tree_writer.h"
+
+namespace raylab {
+
+namespace {
+
+// A triangle and the bounds of its part inside the current cell.
+struct PrimRef {
+  uint32_t tri;
+  Aabb box;
+};
+
+constexpr size_t kParallelTaskSize = 1024;
+
+class MedianBuilder {
+ public:
+  MedianBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
+
+  KdTree run() {
+    const size_t n = mesh_.num_triangles();
+    if (n > kKdMaxIndex) throw std::length_error(fmt::format("kdtree: {} triangles, at most {} supported", n, kKdMaxIndex));
+    max_depth_ = opt_.max_depth < 0 ? kd_default_max_depth(n) : std::min(opt_.max_depth, kKdMaxDepthLimit);
+    if (n == 0) {
+      writer_.set_leaf(0, {});
+      return writer_.finish(Aabb::empty());
+    }
+    std::vector<PrimRef> refs(n);
+    const Aabb bounds = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 8192), Aabb(),
+        [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
+          for (size_t i = r.begin(); i < r.end(); ++i) {
+            refs[i] = PrimRef{static_cast<uint32_t>(i), mesh_.triangle_bounds(i)};
+            acc.extend(refs[i].box);
+          }
+          return acc;
+        },
+        [](const Aabb& a, const Aabb& b) { return merge(a, b); });
+    build(0, bounds, std::move(refs), 0);
+    return writer_.finish(bounds);
+  }
+
+ private:
+  // Which side(s) of plane p on axis k the part `b` lies; the same rules as
+  // the SAH builder's event classification (planar parts in the plane go left).
+  static void sides(const Aabb& b, int k, float p, bool& left, bool& right) {
+    if (b.lo[k] == b.hi[k]) {
+      left = b.lo[k] <= p;
+      right = !left;
+    } else {
+      left = b.lo[k] < p;
+      right = b.hi[k] > p;
+    }
+  }
+
+  void build(uint32_t node, const Aabb& cell, std::vector<PrimRef> refs, int depth) {
+    const size_t n = refs.size();
+    if (n <= static_cast<size_t>(opt_.median_leaf_size) || depth >= max_depth_) return make_leaf(node, refs);
+
+    // Longest axis first; the next ones when the middle separates nothing.
+    const Vec3f ext = cell.diagonal();
+    int order[3] = {0, 1, 2};
+    std::stable_sort(order, order + 3, [&](int x, int y) { return ext[x] > ext[y]; });
+    int axis = -1;
+    float split = 0.0f;
+    for (const int k : order) {
+      const float p = cell.lo[k] + 0.5f * (cell.hi[k] - cell.lo[k]);
+      if (!(p > cell.lo[k] && p < cell.hi[k])) continue;  // zero (or one-ulp) extent
+      size_t nl = 0, nr = 0;
+      for (const PrimRef& r : refs) {
+        bool l, rt;
+        sides(r.box, k, p, l, rt);
+        nl += l;
+        nr += rt;
+      }
+      // Progress: at least one side loses a triangle, and less than half of
+      // them straddle the plane. Without the second rule a cell of
+      // overlapping or duplicated triangles next to a few small ones would
+      // copy the overlapping ones into both children at every level
+      // (exponential in depth); a few large triangles spanning a cell whose
+      // other triangles all lie on one side do not stop the split.
+      if ((nl < n || nr < n) && 2 * (nl + nr) < 3 * n) {
+        axis = k;
+        split = p;
+        break;
+      }
+    }
+    if (axis < 0) return make_leaf(node, refs);
+
+    Aabb left_cell = cell, right_cell = cell;
+    left_cell.hi[axis] = split;
+    right_cell.lo[axis] = split;
+    std::vector<PrimRef> left, right;
+    for (const PrimRef& r : refs) {
+      bool l, rt;
+      sides(r.box, axis, split, l, rt);
+      if (l && rt) {
+        Aabb b;
+        if (clip_to(r.tri, r.box, left_cell, b)) left.push_back(PrimRef{r.tri, b});
+        if (clip_to(r.tri, r.box, right_cell, b)) right.push_back(PrimRef{r.tri, b});
+      } else if (l) {
+        left.push_back(r);
+      } else {
+        right.push_back(r);
+      }
+    }
+    // A guard only: clipping removes references, so the rule above holds.
+    if (left.size() >= n && right.size() >= n) return make_leaf(node, refs);
+    std::vector<PrimRef>().swap(refs);
+
+    const uint32_t pair = writer_.allocate_pair();
+    writer_.set_inner(node, axis, split, pair);
+    if (n >= kParallelTaskSize) {
+      tbb::parallel_invoke([&] { build(pair, left_cell, std::move(left), depth + 1); },
+                           [&] { build(pair + 1, right_cell, std::move(right), depth + 1); });
+    } else {
+      build(pair, left_cell, std::move(left), depth + 1);
+      build(pair + 1, right_cell, std::move(right), depth + 1);
+    }
+  }
+
+  bool clip_to(uint32_t tri, const Aabb& part, const Aabb& cell, Aabb& out) const {
+    if (!opt_.perfect_splits) return clip_box_to_cell(part, cell, out);
+    return clip_triangle_to_cell(mesh_.vertex(tri, 0), mesh_.vertex(tri, 1), mesh_.vertex(tri, 2), cell, out);
+  }
+
+  void make_leaf(uint32_t node, const std::vector<PrimRef>& refs) {
+    std::vector<uint32_t> prims(refs.size());
+    for (size_t i = 0; i < refs.size(); ++i) prims[i] = refs[i].tri;
+    std::sort(prims.begin(), prims.end());
+    writer_.set_leaf(node, prims);
+  }
+
+  const TriangleMesh& mesh_;
+  KdBuildOptions opt_;
+  int max_depth_ = 0;
+  KdTreeWriter writer_;
+};
+
+}  // namespace
+
+KdTree build_kdtree_median(const TriangleMesh& mesh, const KdBuildOptions& options) {
+  return MedianBuilder(mesh, options).run();
+}
+
+}  // namespace raylab

@@ -1,0 +1,845 @@
+// k-d tree (accel/kdtree): exact agreement with brute force (the same
+// watertight kernel on the same triangles, so a missed cell shows up as a
+// different distance), traversal corner cases at split planes, builder
+// invariants, termination on degenerate inputs, statistics, parameters, and
+// agreement with Embree (through the double-precision oracle of `verify`).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <thread>
+
+#include "accel/kdtree/build_sah_events.h"
+#include "accel/kdtree/build_spatial_median.h"
+#include "accel/kdtree/clip_triangle.h"
+#include "accel/registry.h"
+#include "bench/verify.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_registry.h"
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+const char* const kKdSpecs[] = {"kdtree", "kdtree:clip=0", "kdtree:builder=median"};
+
+// ---------------------------------------------------------------- helpers
+
+struct Built {
+  std::unique_ptr<Accelerator> accel;
+  BuildStats stats;
+};
+
+Built build(const std::string& spec, const TriangleMesh& mesh) {
+  Built b{make_accelerator(spec), {}};
+  b.stats = b.accel->build(mesh);
+  return b;
+}
+
+void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const auto base = static_cast<uint32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), {a, b, c});
+  m.triangles.push_back({base, base + 1, base + 2});
+}
+
+std::string describe(const Ray& r) {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), "org (%a %a %a) dir (%a %a %a) t [%a %a]", r.org.x(), r.org.y(), r.org.z(), r.dir.x(),
+                r.dir.y(), r.dir.z(), r.tmin, r.tmax);
+  return buf;
+}
+
+// Brute-force answers for a set of rays, computed once and compared with
+// every k-d tree variant.
+struct Reference {
+  std::vector<Hit> hits;
+  std::vector<uint8_t> occluded;
+};
+
+Reference brute_force(const TriangleMesh& mesh, std::span<const Ray> rays) {
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  Reference ref{std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size())};
+  brute->intersect(rays, ref.hits);
+  brute->occluded(rays, ref.occluded);
+  return ref;
+}
+
+// Closest hit, occlusion and the instrumented kernel must agree with brute
+// force exactly: the same hit or miss, the same distance bit for bit, and the
+// same triangle unless another one is hit at exactly that distance. Returns
+// the number of rays that differ (and describes the first).
+size_t count_mismatches(const Accelerator& kd, const Reference& ref, std::span<const Ray> rays,
+                        std::string* first = nullptr) {
+  const size_t n = rays.size();
+  std::vector<Hit> a(n), c(n);
+  std::vector<uint8_t> oa(n);
+  kd.intersect(rays, a);
+  TraversalStats st;
+  kd.intersect(rays, c, &st);
+  kd.occluded(rays, oa);
+  size_t bad = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Hit& b = ref.hits[i];
+    const bool same_hit = a[i].valid() == b.valid() && (!a[i].valid() || a[i].t == b.t);
+    const bool same_count_kernel = c[i].valid() == a[i].valid() && c[i].t == a[i].t && c[i].prim == a[i].prim;
+    if (same_hit && same_count_kernel && oa[i] == ref.occluded[i]) continue;
+    if (bad++ == 0 && first) {
+      char buf[200];
+      std::snprintf(buf, sizeof(buf), " -> kd (%d, t %a, prim %u) brute (%d, t %a, prim %u) occluded kd %d brute %d",
+                    a[i].valid(), a[i].t, a[i].prim, b.valid(), b.t, b.prim, oa[i], ref.occluded[i]);
+      *first = describe(rays[i]) + buf;
+    }
+  }
+  return bad;
+}
+
+size_t count_mismatches(const Accelerator& kd, const TriangleMesh& mesh, std::span<const Ray> rays,
+                        std::string* first = nullptr) {
+  return count_mismatches(kd, brute_force(mesh, rays), rays, first);
+}
+
+// Rays aimed at points of the mesh's triangles (interior, edges, vertices)
+// from random directions and distances, plus random rays through the box.
+std::vector<Ray> mixed_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
+  Pcg32 rng(seed, 11);
+  const Aabb box = mesh.bounds();
+  const float diag = std::max(box.diagonal().norm(), 1e-3f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    if (i % 3 == 2 || mesh.num_triangles() == 0) {
+      const Vec3f o = box.center() + 0.75f * diag * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+      rays.emplace_back(o, test::random_direction(rng));
+      continue;
+    }
+    const size_t tri = rng.next() % mesh.num_triangles();
+    float u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+    switch (rng.next() % 4) {  // exact vertices and edge points too
+      case 0: u = static_cast<float>(rng.next() % 2), v = 0.0f; break;
+      case 1: v = 1.0f - u; break;
+      default: break;
+    }
+    const Vec3f p = (1.0f - u - v) * mesh.vertex(tri, 0) + u * mesh.vertex(tri, 1) + v * mesh.vertex(tri, 2);
+    const Vec3f o = p + diag * (0.05f + rng.uniform()) * test::random_direction(rng);
+    rays.emplace_back(o, p - o);
+  }
+  return rays;
+}
+
+struct CellInfo {
+  uint32_t node;
+  Aabb cell;
+  int depth;
+};
+
+std::vector<CellInfo> all_cells(const KdTree& tree) {
+  std::vector<CellInfo> out;
+  if (tree.nodes.empty()) return out;
+  std::vector<CellInfo> stack{{0, tree.bounds, 0}};
+  while (!stack.empty()) {
+    const CellInfo c = stack.back();
+    stack.pop_back();
+    out.push_back(c);
+    const KdNode& n = tree.nodes[c.node];
+    if (n.is_leaf()) continue;
+    Aabb lo = c.cell, hi = c.cell;
+    lo.hi[n.axis()] = n.split();
+    hi.lo[n.axis()] = n.split();
+    stack.push_back({n.child(), lo, c.depth + 1});
+    stack.push_back({n.child() + 1, hi, c.depth + 1});
+  }
+  return out;
+}
+
+KdTree build_tree(const std::string& kind, const TriangleMesh& mesh, const KdBuildOptions& opt = {}) {
+  return kind == "median" ? build_kdtree_median(mesh, opt) : build_kdtree_sah(mesh, opt);
+}
+
+// Scenes shared by several tests.
+TriangleMesh cornell() { return make_cornell_box().mesh; }
+
+// Large triangles in 8 parallel planes x = k/8, heavily overlapping within
+// each plane, plus a few small triangles.
+TriangleMesh overlapping_planes(size_t n, uint64_t seed) {
+  TriangleMesh m;
+  Pcg32 rng(seed, 5);
+  for (size_t i = 0; i < n; ++i) {
+    const float x = static_cast<float>(rng.next() % 8) / 8.0f;
+    add_triangle(m, Vec3f(x, rng.uniform(), rng.uniform()), Vec3f(x, rng.uniform(), rng.uniform()),
+                 Vec3f(x, rng.uniform(), rng.uniform()));
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------- agreement with brute force
+
+TEST(KdTree, MatchesBruteForceOnCornellBox) {
+  const TriangleMesh mesh = cornell();
+  const auto rays = mixed_rays(mesh, 20000, 1);
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : {"kdtree", "kdtree:clip=0", "kdtree:builder=median", "kdtree:max_depth=3",
+                           "kdtree:ct=1,ci=80,empty_bonus=0.5"}) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+  }
+}
+
+TEST(KdTree, MollerTrumboreVariantMatchesBruteForceWithTheSameTest) {
+  const TriangleMesh mesh = make_triangle_soup(2000, 9).mesh;
+  const Built kd = build("kdtree:tri=mt", mesh);
+  auto brute = make_accelerator("brute:tri=mt");
+  brute->build(mesh);
+  const auto rays = mixed_rays(mesh, 5000, 3);
+  size_t bad = 0;
+  for (const Ray& r : rays) {
+    const Hit a = kd.accel->intersect1(r), b = brute->intersect1(r);
+    bad += a.valid() != b.valid() || (a.valid() && a.t != b.t);
+  }
+  EXPECT_EQ(bad, 0u);
+}
+
+TEST(KdTree, MatchesBruteForceOnRandomSoups) {
+  for (const auto& [seed, size] : {std::pair{1u, 1.0f}, std::pair{2u, 5.0f}, std::pair{3u, 0.2f}}) {
+    const TriangleMesh mesh = make_triangle_soup(2000, seed, size).mesh;
+    const auto rays = mixed_rays(mesh, 5000, seed + 10);
+    const Reference ref = brute_force(mesh, rays);
+    for (const char* spec : kKdSpecs) {
+      const Built kd = build(spec, mesh);
+      std::string first;
+      EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u)
+          << spec << " seed " << seed << " size " << size << ": " << first;
+    }
+  }
+}
+
+TEST(KdTree, ThousandCopiesOfOneTriangle) {
+  TriangleMesh mesh = make_triangle_copies(1000).mesh;
+  const auto rays = mixed_rays(mesh, 4000, 4);
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+    // Nothing separates identical triangles: no subdivision, no copies.
+    EXPECT_LE(kd.stats.max_depth, 2) << spec;
+    EXPECT_LE(kd.stats.nodes, 9u) << spec;
+    EXPECT_DOUBLE_EQ(kd.stats.extra.at("refs_per_triangle"), 1.0) << spec;
+  }
+  // Next to other geometry the copies are cut off into one leaf.
+  mesh.append(make_triangle_soup(1000, 5).mesh);
+  const auto rays2 = mixed_rays(mesh, 4000, 6);
+  const Reference ref2 = brute_force(mesh, rays2);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref2, rays2, &first), 0u) << spec << ": " << first;
+    EXPECT_LE(kd.stats.extra.at("refs_per_triangle"), 8.0) << spec;
+    EXPECT_GE(kd.stats.extra.at("max_leaf_size"), 1000.0) << spec;
+  }
+}
+
+TEST(KdTree, AllCoplanarAxisAlignedScene) {
+  for (int axis = 0; axis < 3; ++axis) {
+    // A 16 x 16 quad grid (shared edges at multiples of 1/16, exact in
+    // float) and 3000 random overlapping triangles, all in coordinate 0.5.
+    const TriangleMesh mesh = make_coplanar_scene(1500, 16, axis, 7).mesh;
+    std::vector<Ray> rays = mixed_rays(mesh, 3000, 8 + axis);
+    Pcg32 rng(axis, 3);
+    for (int i = 0; i < 2000; ++i) {
+      // Straight through grid vertices and edges (exact), from both sides.
+      Vec3f p;
+      p[axis] = 0.5f;
+      p[(axis + 1) % 3] = static_cast<float>(rng.next() % 17) / 16.0f;
+      p[(axis + 2) % 3] = (i % 2) ? static_cast<float>(rng.next() % 17) / 16.0f : rng.uniform();
+      Vec3f d = test::random_direction(rng);
+      if (std::fabs(d[axis]) < 0.05f) d[axis] = 0.5f;
+      rays.emplace_back(p - d, d);
+      // Lying in the plane: parallel to every triangle (never a hit).
+      Vec3f q = d;
+      q[axis] = (i % 2) ? 0.0f : -0.0f;
+      rays.emplace_back(p - q, q);
+    }
+    const Reference ref = brute_force(mesh, rays);
+    for (const char* spec : kKdSpecs) {
+      const Built kd = build(spec, mesh);
+      std::string first;
+      EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << " axis " << axis << ": " << first;
+      EXPECT_LE(kd.stats.max_depth, kd_default_max_depth(mesh.num_triangles())) << spec;
+      EXPECT_LE(kd.stats.extra.at("refs_per_triangle"), 16.0) << spec;
+    }
+  }
+}
+
+TEST(KdTree, PlanarTrianglesInsideAVolumeGetTheirOwnFlatCells) {
+  // Axis-aligned triangles in the plane x = 0.5 amid a soup: the SAH
+  // builder must consider that plane (planar events) and splits there.
+  TriangleMesh mesh = make_triangle_soup(2000, 12).mesh;
+  Pcg32 rng(12, 1);
+  for (int i = 0; i < 2000; ++i) {
+    const float y = rng.uniform(), z = rng.uniform();
+    add_triangle(mesh, Vec3f(0.5f, y, z), Vec3f(0.5f, y + 0.05f, z), Vec3f(0.5f, y, z + 0.05f));
+  }
+  const KdTree tree = build_kdtree_sah(mesh, {});
+  size_t splits_at_plane = 0, flat_leaves = 0;
+  for (const CellInfo& c : all_cells(tree)) {
+    const KdNode& n = tree.nodes[c.node];
+    if (!n.is_leaf() && n.axis() == 0 && n.split() == 0.5f) ++splits_at_plane;
+    if (n.is_leaf() && n.count() > 0 && c.cell.lo.x() == 0.5f && c.cell.hi.x() == 0.5f) ++flat_leaves;
+  }
+  EXPECT_GT(splits_at_plane, 0u);
+  EXPECT_GT(flat_leaves, 0u);
+  // Rays hitting the planar triangles, rays in their plane.
+  std::vector<Ray> rays = mixed_rays(mesh, 6000, 13);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f p(0.5f, rng.uniform(), rng.uniform());
+    const Vec3f d = test::random_direction(rng);
+    rays.emplace_back(p - d, d);
+    rays.emplace_back(p - Vec3f(0.0f, d.y(), d.z()), Vec3f((i % 2) ? 0.0f : -0.0f, d.y(), d.z()));
+  }
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+  }
+}
+
+TEST(KdTree, ClosedSphereHasNoLeaksNearAndFarFromTheOrigin) {
+  for (const Vec3f& center : {Vec3f(0.3f, -0.2f, 0.1f), Vec3f(1e5f, -2e4f, 3e4f)}) {
+    const TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
+    for (const char* spec : kKdSpecs) {
+      const Built kd = build(spec, sphere);
+      Pcg32 rng(42, 3);
+      size_t leaks = 0;
+      for (int i = 0; i < 10000; ++i) {
+        // From the centre outwards, and from outside towards shared vertices.
+        leaks += !kd.accel->intersect1(Ray(center, test::random_direction(rng))).valid();
+        const size_t tri = rng.next() % sphere.num_triangles();
+        const Vec3f& target = sphere.vertex(tri, static_cast<int>(rng.next() % 3));
+        const Vec3f org = center + 3.0f * (target - center);
+        leaks += !kd.accel->intersect1(Ray(org, target - org)).valid();
+      }
+      EXPECT_EQ(leaks, 0u) << spec << " centre " << center.transpose();
+    }
+  }
+}
+
+// ---------------------------------------------------------------- traversal corner cases
+
+// Rays built from the tree's own split planes: lying in a plane (direction
+// component +0 or -0), parallel to it one ulp away, starting on it, and
+// crossing it exactly where a triangle vertex lies on it.
+std::vector<Ray> split_plane_rays(const TriangleMesh& mesh, const KdTree& tree, uint64_t seed) {
+  Pcg32 rng(seed, 17);
+  const Aabb box = mesh.bounds();
+  std::vector<CellInfo> inner;
+  for (const CellInfo& c : all_cells(tree))
+    if (!tree.nodes[c.node].is_leaf()) inner.push_back(c);
+  std::vector<Ray> rays;
+  if (inner.empty()) return rays;
+  auto point_in = [&](const Aabb& b) {
+    return Vec3f(b.lo.x() + rng.uniform() * (b.hi.x() - b.lo.x()), b.lo.y() + rng.uniform() * (b.hi.y() - b.lo.y()),
+                 b.lo.z() + rng.uniform() * (b.hi.z() - b.lo.z()));
+  };
+  for (int i = 0; i < 2000; ++i) {
+    const CellInfo& c = inner[rng.next() % inner.size()];
+    const int k = tree.nodes[c.node].axis();
+    const float s = tree.nodes[c.node].split();
+    // Origins in the cell, anywhere in the scene, or outside the scene.
+    Vec3f o = (i % 3 == 0) ? point_in(c.cell) : point_in(box);
+    if (i % 3 == 2) o += box.diagonal().norm() * test::random_direction(rng);
+    Vec3f d = test::random_direction(rng);
+    // 1. in the plane, both signs of zero, pointing both ways
+    Vec3f in_plane_o = o, in_plane_d = d;
+    in_plane_o[k] = s;
+    in_plane_d[k] = (i % 2) ? 0.0f : -0.0f;
+    rays.emplace_back(in_plane_o, in_plane_d);
+    rays.emplace_back(in_plane_o, Vec3f(-in_plane_d));
+    // 2. parallel, one ulp below and above
+    // (At s = 0 these are denormals: far below what the triangle test
+    // resolves, so it may report hits there that the tree must reproduce.)
+    Vec3f below = in_plane_o, above = in_plane_o;
+    below[k] = std::nextafter(s, -kInf);
+    above[k] = std::nextafter(s, kInf);
+    rays.emplace_back(below, in_plane_d);
+    rays.emplace_back(above, in_plane_d);
+    // 3. starting on the plane, any direction, also with tmin > 0
+    rays.emplace_back(in_plane_o, d);
+    rays.emplace_back(in_plane_o, d, 1e-3f);
+    // 4. nearly parallel: crosses the plane far away
+    Vec3f grazing = d;
+    grazing[k] = (i % 2 ? 1.0f : -1.0f) * 1e-7f;
+    rays.emplace_back(below, grazing);
+  }
+  // 5. through triangle vertices that lie exactly on a split plane
+  std::vector<std::pair<int, float>> planes;
+  for (const CellInfo& c : inner) planes.emplace_back(tree.nodes[c.node].axis(), tree.nodes[c.node].split());
+  std::sort(planes.begin(), planes.end());
+  for (size_t t = 0; t < mesh.num_triangles() && rays.size() < 25000; ++t)
+    for (int corner = 0; corner < 3; ++corner) {
+      const Vec3f& p = mesh.vertex(t, corner);
+      for (int k = 0; k < 3; ++k)
+        if (std::binary_search(planes.begin(), planes.end(), std::make_pair(k, p[k]))) {
+          const Vec3f d = test::random_direction(rng);
+          rays.emplace_back(p - 0.5f * d, d);
+          Vec3f q = d;
+          q[k] = 0.0f;  // along the plane into the vertex
+          if (q.squaredNorm() > 0.0f) rays.emplace_back(p - q, q);
+        }
+    }
+  return rays;
+}
+
+TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
+  std::vector<std::pair<std::string, TriangleMesh>> scenes = {
+      {"cornell", cornell()},
+      {"soup", make_triangle_soup(1500, 21).mesh},
+      {"coplanar", make_coplanar_scene(500, 8, 1, 22).mesh},
+      {"sphere", make_uv_sphere(32, 16, Vec3f(0.25f, 0.5f, -0.125f), 1.0f)}};
+  for (const auto& [name, mesh] : scenes) {
+    for (const std::string kind : {"sah", "median"}) {
+      for (bool clip : {true, false}) {
+        KdBuildOptions opt;
+        opt.perfect_splits = clip;
+        const KdTree tree = build_tree(kind, mesh, opt);
+        const std::string spec =
+            std::string("kdtree:builder=") + kind + ",clip=" + (clip ? "1" : "0");
+        const Built kd = build(spec, mesh);
+        const auto rays = split_plane_rays(mesh, tree, 5);
+        ASSERT_GT(rays.size(), 1000u) << name;
+        std::string first;
+        EXPECT_EQ(count_mismatches(*kd.accel, mesh, rays, &first), 0u) << name << " " << spec << ": " << first;
+      }
+    }
+  }
+}
+
+TEST(KdTreeTraversal, SignedZeroDirectionsGiveTheSameAnswer) {
+  const TriangleMesh mesh = cornell();
+  const Built kd = build("kdtree", mesh);
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  Pcg32 rng(3, 3);
+  const Aabb box = mesh.bounds();
+  size_t compared = 0;
+  for (int i = 0; i < 5000; ++i) {
+    Vec3f o(box.lo.x() + rng.uniform() * (box.hi.x() - box.lo.x()), box.lo.y() + rng.uniform() * (box.hi.y() - box.lo.y()),
+            box.lo.z() + rng.uniform() * (box.hi.z() - box.lo.z()));
+    Vec3f d = test::random_direction(rng);
+    const int zeros = 1 + static_cast<int>(rng.next() % 2);  // one or two zero components
+    for (int z = 0; z < zeros; ++z) d[(i + z) % 3] = 0.0f;
+    Vec3f dn = d;
+    for (int z = 0; z < zeros; ++z) dn[(i + z) % 3] = -0.0f;
+    const Hit ref = brute->intersect1(Ray(o, d));
+    for (const Vec3f& dir : {d, dn}) {
+      const Hit h = kd.accel->intersect1(Ray(o, dir));
+      ASSERT_EQ(h.valid(), ref.valid()) << describe(Ray(o, dir));
+      if (ref.valid()) {
+        EXPECT_EQ(h.t, ref.t) << describe(Ray(o, dir));
+      }
+      EXPECT_EQ(kd.accel->occluded1(Ray(o, dir)), ref.valid());
+    }
+    compared += ref.valid();
+  }
+  EXPECT_GT(compared, 2500u);  // inside a closed box nearly every ray hits
+}
+
+TEST(KdTreeTraversal, TminTmaxWindows) {
+  const TriangleMesh mesh = make_triangle_soup(2000, 31, 3.0f).mesh;
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  const auto base = mixed_rays(mesh, 2000, 32);
+  std::vector<Ray> rays;
+  for (const Ray& r : base) {
+    const Hit h = brute->intersect1(r);
+    if (!h.valid()) continue;
+    const float t = h.t;
+    rays.emplace_back(r.org, r.dir, 0.0f, t);                         // hit exactly at tmax
+    rays.emplace_back(r.org, r.dir, 0.0f, std::nextafter(t, 0.0f));   // just short of it
+    rays.emplace_back(r.org, r.dir, t, kInf);                         // hit exactly at tmin
+    rays.emplace_back(r.org, r.dir, std::nextafter(t, kInf), kInf);   // past the first hit
+    rays.emplace_back(r.org, r.dir, t, t);                            // empty-length window
+    rays.emplace_back(r.org, r.dir, 0.5f * t, 2.0f * t);
+    rays.emplace_back(r.org, r.dir, -2.0f * t, 0.25f * t);            // negative tmin: behind the origin
+    rays.emplace_back(r.org, r.dir, -kInf, kInf);
+    rays.emplace_back(r.org + t * r.dir, r.dir, 0.0f, kInf);          // starting on the surface
+  }
+  ASSERT_GT(rays.size(), 6000u);
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+  }
+}
+
+TEST(KdTreeTraversal, RaysStartingInsideOutsideAndMissingTheRootCell) {
+  const TriangleMesh mesh = cornell();  // the walls lie on the faces of the root cell
+  const Aabb box = mesh.bounds();
+  Pcg32 rng(8, 8);
+  std::vector<Ray> rays;
+  const Vec3f c = box.center(), ext = box.diagonal();
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f inside = c + 0.5f * ext.cwiseProduct(Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f));
+    const Vec3f outside = c + 2.0f * ext.norm() * test::random_direction(rng);
+    rays.emplace_back(inside, test::random_direction(rng));
+    rays.emplace_back(outside, inside - outside);                        // towards the box
+    rays.emplace_back(outside, outside - inside);                        // away from it
+    rays.emplace_back(outside, test::random_direction(rng));             // mostly missing
+    // On a face of the root cell, lying in it (+0 / -0), or leaving through it.
+    const int k = static_cast<int>(rng.next() % 3);
+    Vec3f on_face = inside;
+    on_face[k] = (i % 2) ? box.lo[k] : box.hi[k];
+    Vec3f along = test::random_direction(rng);
+    along[k] = (i % 4 < 2) ? 0.0f : -0.0f;
+    rays.emplace_back(on_face, along);
+    rays.emplace_back(on_face, test::random_direction(rng));
+    // Parallel to a face, outside the slab: a miss without any division.
+    Vec3f beside = on_face;
+    beside[k] += (i % 2) ? -0.25f : 0.25f;
+    rays.emplace_back(beside, along);
+  }
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+  }
+  // A ray that misses the root cell returns a miss from every query.
+  const Built kd = build("kdtree", mesh);
+  const Ray away(box.center() + Vec3f(0, 2 * box.diagonal().y(), 0), Vec3f(0, 1, 0));
+  EXPECT_FALSE(kd.accel->intersect1(away).valid());
+  EXPECT_FALSE(kd.accel->occluded1(away));
+}
+
+TEST(KdTreeTraversal, InvalidRaysAndEmptyMeshMiss) {
+  const TriangleMesh mesh = cornell();
+  const Built kd = build("kdtree", mesh);
+  const Vec3f o(0, 1, 0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Ray& r : {Ray(o, Vec3f::Zero()), Ray(o, Vec3f(nan, 0, 1)), Ray(Vec3f(nan, 0, 0), Vec3f(0, 0, 1)),
+                       Ray(o, Vec3f(0, 1, 0), 2.0f, 1.0f), Ray(o, Vec3f(0, 1, 0), nan, 1.0f)}) {
+    EXPECT_FALSE(kd.accel->intersect1(r).valid()) << describe(r);
+    EXPECT_FALSE(kd.accel->occluded1(r)) << describe(r);
+  }
+  // A denormal direction component: handled conservatively, still exact.
+  const Ray tiny(o, Vec3f(1e-40f, -1.0f, 1e-41f));
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  EXPECT_EQ(kd.accel->intersect1(tiny).t, brute->intersect1(tiny).t);
+
+  for (const char* spec : kKdSpecs) {
+    const Built empty = build(spec, TriangleMesh{});
+    EXPECT_FALSE(empty.accel->intersect1(Ray(o, Vec3f(0, 0, 1))).valid());
+    EXPECT_FALSE(empty.accel->occluded1(Ray(o, Vec3f(0, 0, 1))));
+    EXPECT_EQ(empty.stats.leaves, 1u);
+  }
+}
+
+TEST(KdTreeTraversal, ConcurrentQueriesGiveTheSameAnswers) {
+  const TriangleMesh mesh = make_triangle_soup(5000, 41).mesh;
+  const Built kd = build("kdtree", mesh);
+  const auto rays = mixed_rays(mesh, 20000, 42);
+  std::vector<Hit> serial(rays.size()), parallel(rays.size());
+  kd.accel->intersect(rays, serial);
+  const size_t half = rays.size() / 2;
+  std::thread a([&] { kd.accel->intersect(std::span(rays).first(half), std::span(parallel).first(half)); });
+  std::thread b([&] { kd.accel->intersect(std::span(rays).subspan(half), std::span(parallel).subspan(half)); });
+  a.join();
+  b.join();
+  for (size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_EQ(serial[i].prim, parallel[i].prim);
+    ASSERT_EQ(serial[i].t, parallel[i].t);
+  }
+}
+
+// ---------------------------------------------------------------- builder invariants
+
+// Every point of every triangle lies in leaves that reference the triangle:
+// the perfect-split clipping may drop a triangle from a cell only when no
+// part of it is inside.
+TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
+  const std::vector<std::pair<std::string, TriangleMesh>> scenes = {
+      {"soup", make_triangle_soup(2000, 51, 4.0f).mesh},
+      {"sphere far away", make_uv_sphere(24, 12, Vec3f(3e4f, 1e4f, -2e4f), 10.0f)},
+      {"cornell", cornell()}};
+  for (const auto& [name, mesh] : scenes) {
+    for (const std::string kind : {"sah", "median"}) {
+      for (bool clip : {true, false}) {
+        KdBuildOptions opt;
+        opt.perfect_splits = clip;
+        const KdTree tree = build_tree(kind, mesh, opt);
+        Pcg32 rng(52, 1);
+        size_t missing = 0, checked = 0;
+        for (size_t t = 0; t < mesh.num_triangles(); ++t) {
+          for (int s = 0; s < 12; ++s) {
+            float u = rng.uniform(), v = rng.uniform();
+            if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+            if (s < 3) u = (s == 1), v = (s == 2);  // the vertices
+            // (Clamped to the triangle's box: rounding must not move a point of
+            // an axis-aligned triangle off its plane.)
+            const Aabb tb = mesh.triangle_bounds(t);
+            const Vec3f p = ((1.0f - u - v) * mesh.vertex(t, 0) + u * mesh.vertex(t, 1) + v * mesh.vertex(t, 2))
+                                .cwiseMax(tb.lo)
+                                .cwiseMin(tb.hi);
+            // The leaves whose closed cells contain p: one, or several when
+            // p lies on split planes. A triangle that only touches a plane
+            // belongs to its own side, so one of them must reference it (a
+            // ray through p visits all of them).
+            std::vector<uint32_t> stack{0};
+            bool referenced = false;
+            while (!stack.empty()) {
+              const KdNode n = tree.nodes[stack.back()];
+              stack.pop_back();
+              if (n.is_leaf()) {
+                const auto* ids = tree.prim_ids.data() + n.offset();
+                referenced |= std::find(ids, ids + n.count(), static_cast<uint32_t>(t)) != ids + n.count();
+                continue;
+              }
+              if (p[n.axis()] <= n.split()) stack.push_back(n.child());
+              if (p[n.axis()] >= n.split()) stack.push_back(n.child() + 1);
+            }
+            ++checked;
+            missing += !referenced;
+          }
+        }
+        EXPECT_GT(checked, mesh.num_triangles());
+        EXPECT_EQ(missing, 0u) << name << " " << kind << " clip " << clip;
+      }
+    }
+  }
+}
+
+TEST(KdTreeBuilder, TreeIsWellFormedAndDeterministic) {
+  const TriangleMesh mesh = make_triangle_soup(20000, 61).mesh;  // large enough for parallel tasks
+  for (const std::string kind : {"sah", "median"}) {
+    const KdTree a = build_tree(kind, mesh), b = build_tree(kind, mesh);
+    ASSERT_EQ(a.nodes.size(), b.nodes.size()) << kind;
+    for (size_t i = 0; i < a.nodes.size(); ++i) {
+      ASSERT_EQ(a.nodes[i].word0, b.nodes[i].word0) << kind << " node " << i;
+      ASSERT_EQ(a.nodes[i].word1, b.nodes[i].word1) << kind << " node " << i;
+    }
+    EXPECT_EQ(a.prim_ids, b.prim_ids) << kind;
+
+    std::vector<uint8_t> referenced(mesh.num_triangles(), 0);
+    const int limit = kd_default_max_depth(mesh.num_triangles());
+    for (const CellInfo& c : all_cells(a)) {
+      const KdNode& n = a.nodes[c.node];
+      EXPECT_LE(c.depth, limit);
+      if (n.is_leaf()) {
+        ASSERT_LE(static_cast<size_t>(n.offset()) + n.count(), a.prim_ids.size());
+        for (uint32_t i = 0; i < n.count(); ++i) referenced[a.prim_ids[n.offset() + i]] = 1;
+      } else {
+        ASSERT_LT(n.child() + 1, a.nodes.size());
+        EXPECT_GE(n.split(), c.cell.lo[n.axis()]);
+        EXPECT_LE(n.split(), c.cell.hi[n.axis()]);
+      }
+    }
+    EXPECT_EQ(std::count(referenced.begin(), referenced.end(), 0), 0) << kind << ": unreferenced triangles";
+  }
+}
+
+TEST(KdTreeBuilder, ClippedBoundsAreTightAndConservative) {
+  const Aabb cell(Vec3f(0, 0, 0), Vec3f(1, 1, 1));
+  Aabb out;
+  // A triangle poking out of the cell on +x: the clipped part is x <= 1.
+  ASSERT_TRUE(clip_triangle_to_cell(Vec3f(0.5f, 0.2f, 0.5f), Vec3f(1.5f, 0.2f, 0.5f), Vec3f(0.5f, 0.8f, 0.5f), cell, out));
+  EXPECT_EQ(out.hi.x(), 1.0f);
+  EXPECT_NEAR(out.hi.y(), 0.8f, 1e-6f);
+  EXPECT_EQ(out.lo.z(), 0.5f);
+  EXPECT_EQ(out.hi.z(), 0.5f);  // planar stays planar
+  // Its box overlaps the corner region [0.9, 1]^2 in x and y, but the
+  // triangle itself does not reach it: perfect clipping drops it there.
+  const Aabb corner(Vec3f(0.9f, 0.75f, 0.0f), Vec3f(1.0f, 1.0f, 1.0f));
+  EXPECT_FALSE(clip_triangle_to_cell(Vec3f(0.5f, 0.2f, 0.5f), Vec3f(1.5f, 0.2f, 0.5f), Vec3f(0.5f, 0.8f, 0.5f), corner, out));
+  EXPECT_TRUE(clip_box_to_cell(Aabb(Vec3f(0.5f, 0.2f, 0.5f), Vec3f(1.5f, 0.8f, 0.5f)), corner, out));
+  // Touching a face counts as inside.
+  EXPECT_TRUE(clip_triangle_to_cell(Vec3f(1, 0.2f, 0.2f), Vec3f(2, 0.2f, 0.2f), Vec3f(2, 0.6f, 0.6f), cell, out));
+  EXPECT_EQ(out.lo.x(), 1.0f);
+  EXPECT_EQ(out.hi.x(), 1.0f);
+  // Random triangles: every sampled point inside the cell is inside the bounds.
+  Pcg32 rng(71, 1);
+  for (int i = 0; i < 2000; ++i) {
+    Vec3f v[3];
+    for (auto& p : v) p = Vec3f(2 * rng.uniform() - 0.5f, 2 * rng.uniform() - 0.5f, 2 * rng.uniform() - 0.5f);
+    const bool hit = clip_triangle_to_cell(v[0], v[1], v[2], cell, out);
+    for (int s = 0; s < 200; ++s) {
+      float a = rng.uniform(), b = rng.uniform();
+      if (a + b > 1) a = 1 - a, b = 1 - b;
+      const Vec3f p = (1 - a - b) * v[0] + a * v[1] + b * v[2];
+      if (!cell.contains(p)) continue;
+      ASSERT_TRUE(hit) << "triangle " << i << " reaches the cell but was dropped";
+      ASSERT_TRUE(out.contains(p)) << "triangle " << i;
+    }
+  }
+}
+
+// ---------------------------------------------------------------- termination on degenerate input
+
+TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
+  struct Case {
+    std::string name;
+    TriangleMesh mesh;
+    double max_refs_per_triangle;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"50k copies", make_triangle_copies(50000).mesh, 1.0});
+  {
+    TriangleMesh points;  // zero-area triangles, all at the same point
+    for (int i = 0; i < 20000; ++i) add_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
+    cases.push_back({"identical points", points, 1.0});
+  }
+  {
+    TriangleMesh planar;  // two axis-aligned triangles, each duplicated 10000 times
+    for (int i = 0; i < 10000; ++i) {
+      add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+      add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 0, 1));
+    }
+    cases.push_back({"duplicated planar pair", planar, 1.0});
+  }
+  cases.push_back({"20k overlapping coplanar", make_coplanar_scene(20000, 0, 2, 3).mesh, 16.0});
+  cases.push_back({"overlapping triangles in 8 planes", overlapping_planes(4000, 4), 40.0});
+  {
+    TriangleMesh mixed = make_triangle_copies(20000).mesh;
+    mixed.append(make_triangle_soup(20000, 5).mesh);
+    cases.push_back({"copies next to a soup", mixed, 4.0});
+  }
+  for (const Case& c : cases) {
+    const auto rays = mixed_rays(c.mesh, 300, 9);
+    const Reference ref = brute_force(c.mesh, rays);
+    for (const char* spec : kKdSpecs) {
+      const Built kd = build(spec, c.mesh);
+      const double refs = kd.stats.extra.at("refs_per_triangle");
+      EXPECT_LE(kd.stats.max_depth, kd_default_max_depth(c.mesh.num_triangles())) << c.name << " " << spec;
+      EXPECT_LE(refs, c.max_refs_per_triangle) << c.name << " " << spec;
+      // Nodes are bounded by the references: leaves hold them, and at most a
+      // depth's worth of empty cells surround each.
+      EXPECT_LE(kd.stats.nodes, 2 * static_cast<size_t>(refs * c.mesh.num_triangles()) * 8 + 1) << c.name << " " << spec;
+      std::string first;
+      EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << c.name << " " << spec << ": " << first;
+    }
+  }
+}
+
+TEST(KdTreeBuilder, MaxDepthParameterBoundsTheTree) {
+  const TriangleMesh mesh = make_triangle_soup(2000, 81).mesh;
+  const auto rays = mixed_rays(mesh, 2000, 82);
+  const Reference ref = brute_force(mesh, rays);
+  for (int depth : {0, 1, 5, 12}) {
+    for (const char* builder : {"sah", "median"}) {
+      const std::string spec = std::string("kdtree:builder=") + builder + ",max_depth=" + std::to_string(depth);
+      const Built kd = build(spec, mesh);
+      EXPECT_LE(kd.stats.max_depth, depth) << spec;
+      EXPECT_EQ(kd.stats.extra.at("max_depth_limit"), depth) << spec;
+      if (depth == 0) {
+        EXPECT_EQ(kd.stats.nodes, 1u) << spec;
+      }
+      std::string first;
+      EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+    }
+  }
+  EXPECT_EQ(kd_default_max_depth(1 << 20), 34);  // 8 + 1.3 * 20
+}
+
+// ---------------------------------------------------------------- statistics and parameters
+
+TEST(KdTreeStats, BuildAndTraversalFiguresAreReported) {
+  const TriangleMesh mesh = make_triangle_soup(10000, 91).mesh;
+  const Built kd = build("kdtree", mesh);
+  const BuildStats& s = kd.stats;
+  EXPECT_GT(s.build_ms, 0.0);
+  EXPECT_GT(s.leaves, 1u);
+  EXPECT_EQ(s.nodes, static_cast<size_t>(s.extra.at("inner_nodes")) + s.leaves);
+  EXPECT_EQ(s.nodes, 2 * static_cast<size_t>(s.extra.at("inner_nodes")) + 1);  // binary tree
+  EXPECT_LE(s.extra.at("empty_leaves"), static_cast<double>(s.leaves));
+  EXPECT_GE(s.extra.at("refs_per_triangle"), 1.0);
+  EXPECT_NEAR(s.extra.at("references"), s.extra.at("refs_per_triangle") * mesh.num_triangles(), 1e-6 * s.extra.at("references"));
+  EXPECT_GT(s.max_depth, 0);
+  EXPECT_LE(s.avg_depth, s.max_depth);
+  EXPECT_GT(s.avg_depth, 1.0);
+  EXPECT_TRUE(std::isfinite(s.sah_cost));
+  EXPECT_GT(s.sah_cost, 1.0);
+  // Nodes (8 bytes), one 40-byte copy per triangle, one index per reference.
+  EXPECT_EQ(s.bytes, s.nodes * 8 + mesh.num_triangles() * 40 + static_cast<size_t>(s.extra.at("references")) * 4);
+
+  // The SAH tree is cheaper than the spatial median one by its own measure.
+  const Built median = build("kdtree:builder=median", mesh);
+  EXPECT_LT(s.sah_cost, median.stats.sah_cost);
+
+  const auto rays = mixed_rays(mesh, 2000, 92);
+  std::vector<Hit> hits(rays.size());
+  TraversalStats ts;
+  kd.accel->intersect(rays, hits, &ts);
+  EXPECT_EQ(ts.rays, rays.size());
+  size_t hit_count = 0;
+  for (const Hit& h : hits) hit_count += h.valid();
+  EXPECT_GE(ts.triangle_tests, hit_count);
+  EXPECT_GE(ts.nodes_visited, hit_count * 2);  // at least the root and a leaf
+  TraversalStats occ_stats;
+  std::vector<uint8_t> occ(rays.size());
+  kd.accel->occluded(rays, occ, &occ_stats);
+  EXPECT_EQ(occ_stats.rays, rays.size());
+  EXPECT_LE(occ_stats.triangle_tests, ts.triangle_tests);  // any hit stops early
+}
+
+TEST(KdTreeParams, BadParametersAreRejected) {
+  for (const char* spec :
+       {"kdtree:ct=-1", "kdtree:ci=0", "kdtree:ci=-3", "kdtree:empty_bonus=1", "kdtree:empty_bonus=-0.1",
+        "kdtree:empty_bonus=nan", "kdtree:max_depth=65", "kdtree:max_depth=-1", "kdtree:max_depth=deep",
+        "kdtree:builder=octree", "kdtree:clip=2", "kdtree:leaf=0", "kdtree:leaf=3",  // leaf is for builder=median
+        "kdtree:builder=median,ct=5", "kdtree:tri=fast", "kdtree:bins=16", "kdtree:ct=1e9"}) {
+    EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
+  }
+  EXPECT_NO_THROW(make_accelerator("kdtree:builder=median,leaf=4,clip=0,max_depth=20"));
+  EXPECT_NO_THROW(make_accelerator("kdtree:ct=1,ci=80,empty_bonus=0.5,max_depth=auto,tri=mt"));
+  const auto r = test::run_raylab("verify --scene cornell --accel kdtree:ct=-1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("ct"), std::string::npos) << r.output;
+}
+
+// ---------------------------------------------------------------- agreement with Embree (verify)
+
+void expect_verify_clean(const Scene& scene, size_t rays) {
+  VerifyOptions vo;
+  vo.rays = rays;
+  const auto records = verify_accelerators(scene, {std::begin(kKdSpecs), std::end(kKdSpecs)}, vo);
+  ASSERT_EQ(records.size(), 3u * vo.ray_sets.size());
+  for (const VerifyRecord& r : records) {
+    EXPECT_EQ(r.raylab_wrong, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
+    EXPECT_EQ(r.occlusion_disagree, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
+  }
+}
+
+TEST(KdTreeVerify, AgreesWithEmbreeOnProceduralScenes) {
+  expect_verify_clean(make_cornell_box(), 20000);
+  expect_verify_clean(make_triangle_soup(20000, 1), 20000);
+  expect_verify_clean(make_triangle_soup(5000, 2, 6.0f), 20000);
+  expect_verify_clean(make_triangle_copies(1000), 20000);
+  expect_verify_clean(make_coplanar_scene(1000, 16, 2, 1), 20000);
+  expect_verify_clean(make_coplanar_scene(1000, 16, 0, 2), 20000);
+}
+
+TEST(KdTreeVerify, CommandLineReportsNoWrongHits) {
+  const auto r = test::run_raylab("verify --scene copies:n=1000 --accel kdtree,kdtree:builder=median,kdtree:clip=0 --rays 4096");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("kdtree:builder=median"), std::string::npos) << r.output;
+}
+
+TEST(KdTreeVerify, AgreesWithEmbreeOnSharedMeshes) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "no ../shared/scenes";
+  for (const char* file : {"scenes/cornell_box.obj", "scenes/teapot.ply", "scenes/bunny.ply", "scenes/sponza.ply",
+                           "scenes/spd/tetra_s6.obj", "scenes/spd/gears_s4.obj"}) {
+    const Scene scene = load_scene(test::shared_dir() + "/" + file);
+    expect_verify_clean(scene, 8192);
+  }
+}
+
+}  // namespace
+}  // namespace raylab
