@@ -1,9 +1,7 @@
 #include "accel/bvh/build_binned_sah.h"
 
-#include <emmintrin.h>
-#if defined(__SSE4_1__)
-#include <smmintrin.h>
-#endif
+#include "accel/bvh/sah_binning.h"
+
 
 #include <algorithm>
 #include <atomic>
@@ -19,79 +17,22 @@ namespace raylab {
 
 namespace {
 
-constexpr int kMaxBins = 256;
+using sah::BinSet;
+using sah::Binning;
+using sah::Split;
+using sah::bin_refs;
+using sah::find_binned_split;
+
 constexpr size_t kParallelTaskSize = 4096;     // subtrees at least this large become tasks
-constexpr size_t kParallelBinSize = 32768;     // ranges at least this large bin in parallel
 constexpr size_t kParallelPartitionSize = 32768;
-
-struct BinSet {
-  Box4 box[3][kMaxBins];
-  uint32_t count[3][kMaxBins];
-
-  explicit BinSet(int bins) {
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < bins; ++b) {
-        box[a][b] = Box4();
-        count[a][b] = 0;
-      }
-  }
-  void merge_from(const BinSet& o, int bins) {
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < bins; ++b) {
-        box[a][b].extend(o.box[a][b]);
-        count[a][b] += o.count[a][b];
-      }
-  }
-};
-
-// Maps centroids to bins: bin = trunc((c - lo) * scale), clamped. Axes with
-// flat centroid bounds get scale 0 (everything in bin 0) and are skipped.
-struct Binning {
-  __m128 lo;
-  __m128 scale;
-  alignas(16) float scale_s[4];
-  __m128i max_bin;
-
-  Binning(const Box4& cbounds, int bins) {
-    lo = cbounds.lo;
-    alignas(16) float ext[4];
-    _mm_store_ps(ext, _mm_sub_ps(cbounds.hi, cbounds.lo));
-    for (int a = 0; a < 3; ++a)
-      scale_s[a] = ext[a] > 0.0f ? static_cast<float>(bins) * (1.0f - 1e-6f) / ext[a] : 0.0f;
-    scale_s[3] = 0.0f;
-    scale = _mm_load_ps(scale_s);
-    max_bin = _mm_set1_epi32(bins - 1);
-  }
-
-  __m128i bins_of(const BuildRef& r) const {
-    const __m128i i = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(r.centroid(), lo), scale));
-#if defined(__SSE4_1__)
-    return _mm_max_epi32(_mm_min_epi32(i, max_bin), _mm_setzero_si128());
-#else
-    const __m128i over = _mm_cmpgt_epi32(i, max_bin);
-    const __m128i clipped = _mm_or_si128(_mm_and_si128(over, max_bin), _mm_andnot_si128(over, i));
-    return _mm_andnot_si128(_mm_cmplt_epi32(clipped, _mm_setzero_si128()), clipped);
-#endif
-  }
-  int bin_of(const BuildRef& r, int axis) const {
-    alignas(16) int32_t v[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(v), bins_of(r));
-    return v[axis];
-  }
-};
-
-struct Split {
-  int axis = -1;
-  int pos = 0;  // references in bins < pos go left
-  float cost = std::numeric_limits<float>::infinity();  // lA*lN + rA*rN
-  Box4 left, right;
-  uint32_t left_count = 0;
-};
+// Nodes with at most this many references evaluate every object split exactly
+// (sorted centroids) instead of binning: cheaper for small nodes, and exact.
+constexpr size_t kSmallSweep = 16;
 
 class BinnedBuilder {
  public:
   BinnedBuilder(std::vector<BuildRef>&& refs, const BuildOptions& o) : refs_(std::move(refs)), opt_(o) {
-    opt_.bins = std::clamp(opt_.bins, 2, kMaxBins);
+    opt_.bins = std::clamp(opt_.bins, 2, sah::kMaxBins);
     opt_.max_leaf = std::max(1, opt_.max_leaf);
   }
 
@@ -122,7 +63,7 @@ class BinnedBuilder {
       }
       return acc;
     };
-    Pair res = (e - b >= kParallelBinSize)
+    Pair res = (e - b >= sah::kParallelBinSize)
                    ? tbb::parallel_reduce(tbb::blocked_range<size_t>(b, e, 8192), Pair{}, body,
                                           [](Pair x, const Pair& y) {
                                             return Pair{merge(x.first, y.first), merge(x.second, y.second)};
@@ -130,78 +71,6 @@ class BinnedBuilder {
                    : body(tbb::blocked_range<size_t>(b, e), Pair{});
     bounds = res.first;
     cbounds = res.second;
-  }
-
-  void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& bn, BinSet& bins) const {
-    for (size_t i = b; i < e; ++i) {
-      const BuildRef& r = refs[i];
-      alignas(16) int32_t idx[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
-      for (int a = 0; a < 3; ++a) {
-        bins.box[a][idx[a]].extend(r.box);
-        bins.count[a][idx[a]]++;
-      }
-    }
-  }
-
-  std::unique_ptr<BinSet> bin(const BuildRef* refs, size_t b, size_t e, const Binning& bn) const {
-    const int nb = opt_.bins;
-    if (e - b < kParallelBinSize) {
-      auto bins = std::make_unique<BinSet>(nb);
-      bin_range(refs, b, e, bn, *bins);
-      return bins;
-    }
-    struct Reducer {
-      const BinnedBuilder* self;
-      const BuildRef* refs;
-      const Binning* bn;
-      std::unique_ptr<BinSet> bins;
-      Reducer(const BinnedBuilder* s, const BuildRef* r, const Binning* b)
-          : self(s), refs(r), bn(b), bins(std::make_unique<BinSet>(s->opt_.bins)) {}
-      Reducer(Reducer& o, tbb::split) : Reducer(o.self, o.refs, o.bn) {}
-      void operator()(const tbb::blocked_range<size_t>& r) { self->bin_range(refs, r.begin(), r.end(), *bn, *bins); }
-      void join(const Reducer& o) { bins->merge_from(*o.bins, self->opt_.bins); }
-    } red(this, refs, &bn);
-    tbb::parallel_reduce(tbb::blocked_range<size_t>(b, e, 16384), red);
-    return std::move(red.bins);
-  }
-
-  Split find_split(const BinSet& bins, const Binning& bn, uint32_t n) const {
-    const int nb = opt_.bins;
-    Split best;
-    float right_area[kMaxBins];
-    uint32_t right_count[kMaxBins];
-    Box4 right_box[kMaxBins];
-    for (int a = 0; a < 3; ++a) {
-      if (bn.scale_s[a] <= 0.0f) continue;
-      Box4 acc;
-      uint32_t cnt = 0;
-      for (int b = nb - 1; b > 0; --b) {
-        acc.extend(bins.box[a][b]);
-        cnt += bins.count[a][b];
-        right_box[b] = acc;
-        right_area[b] = acc.half_area();
-        right_count[b] = cnt;
-      }
-      Box4 left;
-      uint32_t lc = 0;
-      for (int b = 1; b < nb; ++b) {
-        left.extend(bins.box[a][b - 1]);
-        lc += bins.count[a][b - 1];
-        if (lc == 0 || right_count[b] == 0) continue;
-        const float cost = left.half_area() * static_cast<float>(lc) + right_area[b] * static_cast<float>(right_count[b]);
-        if (cost < best.cost) {
-          best.cost = cost;
-          best.axis = a;
-          best.pos = b;
-          best.left = left;
-          best.right = right_box[b];
-          best.left_count = lc;
-        }
-      }
-    }
-    (void)n;
-    return best;
   }
 
   // In-place partition of refs[b, e) by the split; accumulates the sides'
@@ -265,6 +134,56 @@ class BinnedBuilder {
     return b + total_left;
   }
 
+  // Exact SAH over the n-1 object splits of each axis for small nodes;
+  // reorders refs[b, e) along the best axis and returns the split.
+  Split small_sweep(BuildRef* refs, size_t b, size_t e, size_t& mid, Box4& lcb, Box4& rcb) const {
+    const int n = static_cast<int>(e - b);
+    alignas(16) float c[kSmallSweep][4];
+    for (int i = 0; i < n; ++i) _mm_store_ps(c[i], refs[b + i].centroid());
+    uint8_t order[3][kSmallSweep];
+    Split best;
+    float right_area[kSmallSweep];
+    for (int a = 0; a < 3; ++a) {
+      uint8_t* o = order[a];
+      for (int i = 0; i < n; ++i) {
+        int j = i;
+        for (; j > 0 && c[o[j - 1]][a] > c[i][a]; --j) o[j] = o[j - 1];
+        o[j] = static_cast<uint8_t>(i);
+      }
+      Box4 acc;
+      for (int i = n - 1; i > 0; --i) {
+        acc.extend(refs[b + o[i]].box);
+        right_area[i] = acc.half_area();
+      }
+      Box4 left;
+      for (int i = 1; i < n; ++i) {
+        left.extend(refs[b + o[i - 1]].box);
+        const float cost = left.half_area() * static_cast<float>(i) + right_area[i] * static_cast<float>(n - i);
+        if (cost < best.cost) {
+          best.cost = cost;
+          best.axis = a;
+          best.pos = i;
+          best.left = left;
+          best.left_count = static_cast<uint32_t>(i);
+        }
+      }
+    }
+    BuildRef tmp[kSmallSweep];
+    for (int i = 0; i < n; ++i) tmp[i] = refs[b + i];
+    const uint8_t* o = order[best.axis];
+    best.right = Box4();
+    for (int i = 0; i < n; ++i) {
+      refs[b + i] = tmp[o[i]];
+      if (i < best.pos) lcb.extend(refs[b + i].centroid());
+      else {
+        rcb.extend(refs[b + i].centroid());
+        best.right.extend(refs[b + i].box);
+      }
+    }
+    mid = b + static_cast<size_t>(best.pos);
+    return best;
+  }
+
   void make_leaf(uint32_t node, const BuildRef* refs, size_t b, size_t e, const Box4& bounds) {
     for (size_t i = b; i < e; ++i) out_.prim_ids[i] = refs[i].prim();
     set_leaf(out_.nodes[node], bounds.aabb(), static_cast<uint32_t>(b), static_cast<uint32_t>(e - b));
@@ -284,10 +203,19 @@ class BinnedBuilder {
     BuildRef* child_buf = cur;
     BuildRef* child_other = other;
     bool done = false;
-    if (!flat && depth < kForceMedianDepth) {
+    if (n <= kSmallSweep && depth < kForceMedianDepth) {
+      const Split s = small_sweep(cur, b, e, mid, lcb, rcb);
+      const float area = bounds.half_area();
+      const float split_cost = opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);
+      if (n <= static_cast<size_t>(opt_.max_leaf) && opt_.intersection_cost * static_cast<float>(n) <= split_cost)
+        return make_leaf(node, cur, b, e, bounds);
+      lb = s.left;
+      rb = s.right;
+      done = true;
+    } else if (!flat && depth < kForceMedianDepth) {
       const Binning bn(cbounds, opt_.bins);
-      const auto bins = bin(cur, b, e, bn);
-      const Split s = find_split(*bins, bn, static_cast<uint32_t>(n));
+      const auto bins = bin_refs(cur, b, e, bn, opt_.bins);
+      const Split s = find_binned_split(*bins, bn, opt_.bins);
       const float area = bounds.half_area();
       const float split_cost =
           opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);

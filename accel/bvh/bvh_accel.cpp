@@ -18,6 +18,10 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/bvh/build_binned_sah.h"
+#include "accel/bvh/build_lbvh.h"
+#include "accel/bvh/build_sbvh.h"
+#include "accel/bvh/build_sweep_sah.h"
+#include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/traverse_wide.h"
@@ -37,6 +41,9 @@ struct BvhConfig {
   int leaf = 0;           // max references per leaf (0 = layout default)
   int block = 0;          // triangles per SIMD block (0 = layout default)
   int bins = 32;
+  float alpha = 1e-5f;        // SBVH overlap threshold
+  float split_budget = 0.5f;  // SBVH extra references / triangles
+  double opt_ms = 500.0;      // reinsertion time budget
   float node_cost = 1.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
@@ -148,11 +155,37 @@ class BvhAccel final : public Accelerator {
     bo.bins = cfg_.bins;
     bo.max_leaf = 1;  // leaves are formed by the SAH-optimal collapse
     Timer phase;
-    BinaryBvh tree = build_binned_sah(boxes, centroids, bo);
+    BinaryBvh tree;
+    switch (cfg_.builder) {
+      case BuilderKind::Binned: tree = build_binned_sah(boxes, centroids, bo); break;
+      case BuilderKind::Sweep: tree = build_sweep_sah(boxes, centroids, bo); break;
+      case BuilderKind::Lbvh: tree = build_lbvh(boxes, centroids); break;
+      case BuilderKind::Sbvh: {
+        SbvhOptions so;
+        so.base = bo;
+        so.alpha = cfg_.alpha;
+        so.split_budget = cfg_.split_budget;
+        SbvhStats ss;
+        tree = build_sbvh(boxes, centroids, TriangleSplitter(mesh), so, &ss);
+        s.extra["spatial_splits"] = static_cast<double>(ss.spatial_splits);
+        break;
+      }
+    }
     s.extra["ms_tree"] = phase.ms();
+    s.extra["refs_per_triangle"] = n ? static_cast<double>(tree.prim_ids.size()) / n : 0.0;
+    if (cfg_.reinsert) {
+      ReinsertionOptions ro;
+      ro.time_budget_ms = cfg_.opt_ms;
+      ReinsertionStats rs;
+      tree = optimize_reinsertion(tree, ro, &rs);
+      s.extra["sah_before_opt"] = rs.sah_before;
+      s.extra["sah_after_opt"] = rs.sah_after;
+      s.extra["opt_ms"] = rs.ms;
+      s.extra["opt_rounds"] = rs.rounds;
+      s.extra["opt_moves"] = static_cast<double>(rs.moves);
+    }
     const TreeShape tree_shape = measure_tree(tree.nodes);
     s.extra["sah_tree"] = tree_shape.sah_cost;
-    s.extra["refs_per_triangle"] = n ? static_cast<double>(tree.prim_ids.size()) / n : 0.0;
     if (tree_shape.max_depth > kMaxTreeDepth)
       throw std::runtime_error(fmt::format("bvh: tree depth {} exceeds {}", tree_shape.max_depth, kMaxTreeDepth));
 
@@ -231,6 +264,9 @@ AcceleratorInfo bvh_accelerator_info() {
        {"leaf", "0", "max triangles per leaf (0 = layout default: bvh2 4, wide 2 blocks)"},
        {"block", "4", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
        {"bins", "32", "SAH bins per axis (2..256)"},
+       {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
+       {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
+       {"opt_ms", "500", "reinsert: time budget in ms"},
        {"ct", "1", "collapse SAH cost of a node visit"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
        {"tri", "watertight", "triangle test: watertight (Woop et al. 2013); mt (Moller-Trumbore) with layout=bvh2 only"}},
@@ -249,6 +285,12 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.leaf < 1 || c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
         c.bins = p.integer("bins");
         if (c.bins < 2 || c.bins > 256) throw SpecError("bvh: bins must be in 2..256");
+        c.alpha = static_cast<float>(p.real("alpha"));
+        c.split_budget = static_cast<float>(p.real("budget"));
+        c.opt_ms = p.real("opt_ms");
+        if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
+          throw SpecError("bvh: alpha must be >= 0 and budget in 0..4");
+        if (!(c.opt_ms >= 0.0 && c.opt_ms <= 1e6)) throw SpecError("bvh: opt_ms must be in 0..1e6");
         c.node_cost = static_cast<float>(p.real("ct"));
         c.block_cost = static_cast<float>(p.real("ci"));
         if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
