@@ -9,6 +9,7 @@
 // layers); its first 3 layers sort lanes 0..3 and 4..7 independently, which
 // is all that is needed when at most 4 children were hit (the others are 0).
 // Each layer is one permute, a min, a max and a blend.
+#include <algorithm>
 #include <cstdint>
 
 #include "accel/bvh/simd.h"
@@ -18,10 +19,10 @@ namespace raylab {
 // Key of a child: distance clamped at 0 (ordering only needs to be a heuristic
 // for negative entry distances, which arise only when tmin < 0).
 inline uint64_t child_key(float dist, uint32_t ref) {
-  uint32_t bits;
+  int32_t bits;
   std::memcpy(&bits, &dist, sizeof bits);
-  if (bits & 0x80000000u) bits = 0;  // negative (or -0): order as 0
-  return (static_cast<uint64_t>(bits) << 32) | ref;
+  bits = std::max(bits, 0);  // negative (or -0): order as 0
+  return (static_cast<uint64_t>(static_cast<uint32_t>(bits)) << 32) | ref;
 }
 inline float key_dist(uint64_t key) {
   const uint32_t bits = static_cast<uint32_t>(key >> 32);

@@ -57,28 +57,105 @@ struct WideNodeRay {
   V org[3];
 #endif
   int near_off[3], far_off[3];  // float offsets of the near / far plane arrays in a node
+};
 
-  explicit WideNodeRay(const Ray& r) {
-    const SlabRay s(r);
-    for (int a = 0; a < 3; ++a) {
-      inv[a] = V::broadcast(s.inv_dir[a]);
-      near_off[a] = (2 * a + s.neg[a]) * N;
-      far_off[a] = (2 * a + 1 - s.neg[a]) * N;
-#if defined(RAYLAB_SIMD_FMA)
-      const float oi = r.org[a] * s.inv_dir[a];
-      float up = std::nextafter(oi, std::numeric_limits<float>::infinity());
-      float down = std::nextafter(oi, -std::numeric_limits<float>::infinity());
-      // Keep denormals out of the hot loop: a wider bound is still a bound.
-      if (std::fabs(up) < FLT_MIN) up = FLT_MIN;
-      if (std::fabs(down) < FLT_MIN) down = -FLT_MIN;
-      near_shift[a] = V::broadcast(-up);
-      far_shift[a] = V::broadcast(-down);
+// Everything a traversal needs per ray: the safe reciprocals of the slab test
+// (as SlabRay) and the axis permutation and shear of the watertight test (as
+// WatertightRay). Divisions are correctly rounded in vector or scalar form,
+// so the values are identical to the scalar code's. Built without branches
+// when AVX is available: setup is a large share of a short ray's cost.
+template <int N, int W>
+struct WideRay {
+  WideNodeRay<N> node;
+  BlockRay<W> tri;
+
+  [[gnu::always_inline]] explicit WideRay(const Ray& r) {
+    float inv[3], shift_up[3], shift_down[3];
+    WatertightRay w;
+    w.org = r.org;
+#if defined(__AVX__)
+    const __m128 d = _mm_setr_ps(r.dir.x(), r.dir.y(), r.dir.z(), 1.0f);
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    const __m128 ad = _mm_and_ps(d, abs_mask);
+    // Safe reciprocals: components below 1e-30 in magnitude become +-1e-30.
+    const __m128 tiny = _mm_set1_ps(1e-30f);
+    const __m128 small = _mm_cmplt_ps(ad, tiny);
+    const __m128 signed_tiny = _mm_or_ps(tiny, _mm_andnot_ps(abs_mask, d));
+    const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), _mm_blendv_ps(d, signed_tiny, small));
+    // Dominant axis (ties resolved as in WatertightRay) and permutation.
+    alignas(16) float adv[4];
+    _mm_store_ps(adv, ad);
+    const int kz = (adv[0] >= adv[1]) ? (adv[0] >= adv[2] ? 0 : 2) : (adv[1] >= adv[2] ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    const bool flip = r.dir[kz] < 0.0f;
+    const int tx = flip ? ky : kx, ty = flip ? kx : ky;
+    kx = tx, ky = ty;
+    const __m128 num = _mm_permutevar_ps(d, _mm_setr_epi32(kx, ky, 3, 3));
+    const __m128 den = _mm_permutevar_ps(d, _mm_setr_epi32(kz, kz, kz, 3));
+    alignas(16) float shear[4];
+    _mm_store_ps(shear, _mm_div_ps(num, den));
+    // o * inv bounded from above and below: |oi| * 2^-22 exceeds one ulp, and
+    // FLT_MIN keeps the bounds off zero and out of the denormals. Overflow to
+    // infinity is kept (up) or clamped to FLT_MAX (down) by NaN-first min/max.
+    const __m128 o = _mm_setr_ps(r.org.x(), r.org.y(), r.org.z(), 0.0f);
+    const __m128 oi = _mm_mul_ps(o, inv4);
+    const __m128 delta = _mm_add_ps(_mm_mul_ps(_mm_and_ps(oi, abs_mask), _mm_set1_ps(0x1p-22f)), _mm_set1_ps(FLT_MIN));
+    const __m128 up = _mm_max_ps(_mm_add_ps(oi, delta), _mm_set1_ps(-FLT_MAX));
+    const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
+    alignas(16) float invv[4], upv[4], downv[4];
+    _mm_store_ps(invv, inv4);
+    _mm_store_ps(upv, up);
+    _mm_store_ps(downv, down);
+    for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
+    const int neg_mask = _mm_movemask_ps(d);
+    w.kx = kx, w.ky = ky, w.kz = kz;
+    w.sx = shear[0], w.sy = shear[1], w.sz = shear[2];
 #else
-      org[a] = V::broadcast(r.org[a]);
+    const SlabRay sr(r);
+    w = WatertightRay(r);
+    int neg_mask = 0;
+    for (int a = 0; a < 3; ++a) {
+      inv[a] = sr.inv_dir[a];
+      neg_mask |= sr.neg[a] << a;
+      const float oi = r.org[a] * inv[a];
+      const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
+      const float u = oi + delta, dn = oi - delta;
+      shift_up[a] = u == u ? u : -FLT_MAX;
+      shift_down[a] = dn == dn ? dn : FLT_MAX;
+    }
+#endif
+    tri.init(w);
+    using V = simd::vfloat<N>;
+    for (int a = 0; a < 3; ++a) {
+      const int neg = (neg_mask >> a) & 1;
+      node.inv[a] = V::broadcast(inv[a]);
+      node.near_off[a] = (2 * a + neg) * N;
+      node.far_off[a] = (2 * a + 1 - neg) * N;
+#if defined(RAYLAB_SIMD_FMA)
+      node.near_shift[a] = V::broadcast(-shift_up[a]);
+      node.far_shift[a] = V::broadcast(-shift_down[a]);
+#else
+      node.org[a] = V::broadcast(r.org[a]);
+      (void)shift_up;
+      (void)shift_down;
 #endif
     }
   }
 };
+
+// ray_is_valid(r) && r.tmin <= r.tmax, inline: finite origin and direction,
+// non-zero direction, tmin and tmax not NaN, tmin <= tmax.
+inline bool wide_ray_valid(const Ray& r) {
+  const float o[3] = {r.org.x(), r.org.y(), r.org.z()};
+  const float d[3] = {r.dir.x(), r.dir.y(), r.dir.z()};
+  bool finite = true, nonzero = false;
+  for (int a = 0; a < 3; ++a) {
+    finite &= (o[a] - o[a] == 0.0f) & (d[a] - d[a] == 0.0f);  // false for inf and NaN
+    nonzero |= d[a] != 0.0f;
+  }
+  return finite & nonzero & (r.tmin <= r.tmax);  // also false when either is NaN
+}
 
 // Tests the N child boxes of a node; returns the mask of children whose
 // (padded) slab interval overlaps [tmin, tmax], and their entry distances.
@@ -112,10 +189,11 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
   using V = simd::vfloat<N>;
   Hit hit;
   if constexpr (kCount) stats->rays++;
-  if (!ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
+  if (!wide_ray_valid(ray)) return hit;
 
-  const WideNodeRay<N> nr(ray);
-  const BlockRay<W> br(ray);
+  const WideRay<N, W> wr(ray);
+  const WideNodeRay<N>& nr = wr.node;
+  const BlockRay<W>& br = wr.tri;
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
   const V tmin_v = V::broadcast(tmin);
@@ -158,15 +236,11 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
       tnear.store(dist);
       const uint32_t i1 = simd::ctz(rest);
       if ((rest & (rest - 1)) == 0) {
-        uint32_t near = child[i0], far = child[i1];
-        float dfar = dist[i1];
-        if (dist[i1] < dist[i0]) {
-          near = child[i1];
-          far = child[i0];
-          dfar = dist[i0];
-        }
-        stack[sp++] = child_key(dfar, far);
-        cur = near;
+        // Two children: order their keys with min/max (no branch to mispredict).
+        const uint64_t k0 = child_key(dist[i0], child[i0]);
+        const uint64_t k1 = child_key(dist[i1], child[i1]);
+        stack[sp++] = std::max(k0, k1);
+        cur = key_ref(std::min(k0, k1));
         continue;
       }
       // Three or more: sort by distance, push all but the nearest.

@@ -24,7 +24,7 @@
 namespace raylab {
 
 template <int W>
-struct alignas(W * 4 >= 64 ? 64 : W * 4) TriangleBlock {
+struct alignas(W >= 8 ? 64 : 32) TriangleBlock {
   float v[3][3][W];   // v[corner][axis][lane]
   uint32_t prim[W];   // triangle ids; padding lanes repeat prim[0]
 
@@ -36,25 +36,27 @@ struct alignas(W * 4 >= 64 ? 64 : W * 4) TriangleBlock {
   }
 };
 
-// Per-ray constants of the block test.
+// Per-ray constants of the block test: the same values as WatertightRay
+// (axis permutation, shear constants), broadcast to W lanes.
 template <int W>
 struct BlockRay {
   using V = simd::vfloat<W>;
-  WatertightRay scalar;    // the scalar test's constants (double fallback, picks)
   V ox, oy, oz;            // origin components along kx, ky, kz
   V sx, sy, sz;            // shear constants
   int off_x, off_y, off_z; // kx*W, ky*W, kz*W: offsets of the permuted axes in a block
 
-  explicit BlockRay(const Ray& r) : scalar(r) {
-    ox = V::broadcast(r.org[scalar.kx]);
-    oy = V::broadcast(r.org[scalar.ky]);
-    oz = V::broadcast(r.org[scalar.kz]);
-    sx = V::broadcast(scalar.sx);
-    sy = V::broadcast(scalar.sy);
-    sz = V::broadcast(scalar.sz);
-    off_x = scalar.kx * W;
-    off_y = scalar.ky * W;
-    off_z = scalar.kz * W;
+  BlockRay() = default;
+  explicit BlockRay(const Ray& r) { init(WatertightRay(r)); }
+  void init(const WatertightRay& w) {
+    ox = V::broadcast(w.org[w.kx]);
+    oy = V::broadcast(w.org[w.ky]);
+    oz = V::broadcast(w.org[w.kz]);
+    sx = V::broadcast(w.sx);
+    sy = V::broadcast(w.sy);
+    sz = V::broadcast(w.sz);
+    off_x = w.kx * W;
+    off_y = w.ky * W;
+    off_z = w.kz * W;
   }
 };
 
