@@ -6,14 +6,15 @@
 #include <vector>
 
 #include "accel/bvh/collapse_wide.h"
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/traverse_bvh2.h"
 #include "accel/core/triangle_mesh.h"
 
 namespace raylab {
 
 struct Bvh2Layout {
-  std::vector<Bvh2Node> nodes;
-  std::vector<LeafTriangle> tris;
+  HugePageVector<Bvh2Node> nodes;
+  HugePageVector<LeafTriangle> tris;
 
   size_t bytes() const { return nodes.size() * sizeof(Bvh2Node) + tris.size() * sizeof(LeafTriangle); }
   Bvh2View view() const { return Bvh2View{nodes.data(), tris.data(), tris.empty()}; }

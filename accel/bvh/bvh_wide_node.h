@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "accel/bvh/collapse_wide.h"
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/core/triangle_mesh.h"
 
@@ -50,8 +51,8 @@ struct alignas(64) WideNode {
 // Nodes plus triangle blocks; the root is wide node 0 unless root_ref is a leaf.
 template <int N, int W>
 struct WideBvh {
-  std::vector<WideNode<N>> nodes;
-  std::vector<TriangleBlock<W>> blocks;
+  HugePageVector<WideNode<N>> nodes;
+  HugePageVector<TriangleBlock<W>> blocks;
   uint32_t root_ref = wide_ref::kEmpty;
   Aabb root_box;
 

@@ -160,7 +160,7 @@ inline bool wide_ray_valid(const Ray& r) {
 // Tests the N child boxes of a node; returns the mask of children whose
 // (padded) slab interval overlaps [tmin, tmax], and their entry distances.
 template <int N>
-inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r, simd::vfloat<N> tmin,
+[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r, simd::vfloat<N> tmin,
                                    simd::vfloat<N> tmax, simd::vfloat<N>& tnear) {
   using V = simd::vfloat<N>;
   const float* b = &node.bounds[0][0];
@@ -182,6 +182,17 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>
   tnear = max(max(nx, ny), max(nz, tmin));
   const V tfar = min(min(min(fx, fy), fz) * V::broadcast(kSlabFarScale), tmax);
   return cmp_le(tnear, tfar);
+}
+
+// Prefetches what visiting `ref` will read first: a node's plane arrays, or a
+// leaf's first triangle block. Children are prefetched when pushed, so they
+// are (more likely) in cache when popped.
+template <int N, int W>
+[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
+  const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
+                                         : reinterpret_cast<const char*>(bvh.nodes + ref);
+  constexpr int kLines = 3;
+  for (int i = 0; i < kLines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
 template <int N, int W, bool kAnyHit, bool kCount>
@@ -232,6 +243,37 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
         cur = child[i0];
         continue;
       }
+      if constexpr (kAnyHit) {
+        // Any hit: no ordering by distance. A ray leaving a surface starts
+        // just outside the leaf box of the triangle it will hit first, and
+        // every other box around its origin ties at distance 0, so distance
+        // order is a poor guess here. Leaf children go first (one test may end
+        // the ray), then children in descending slot order (as Embree's
+        // occlusion traversal); measured best on the benchmark scenes.
+        uint32_t leaves = 0;
+        for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
+        leaves &= mask;
+        for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
+          const uint32_t c = child[simd::ctz(m)];
+          prefetch_child(bvh, c);
+          stack[sp++] = child_key(0.0f, c);
+        }
+        if (leaves == 0) {
+          cur = key_ref(stack[--sp]);
+          continue;
+        }
+        while (true) {
+          const uint32_t c = child[simd::ctz(leaves)];
+          leaves &= leaves - 1;
+          if (leaves == 0) {
+            cur = c;
+            break;
+          }
+          prefetch_child(bvh, c);
+          stack[sp++] = child_key(0.0f, c);
+        }
+        continue;
+      }
       alignas(64) float dist[N];
       tnear.store(dist);
       const uint32_t i1 = simd::ctz(rest);
@@ -239,6 +281,7 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
         // Two children: order their keys with min/max (no branch to mispredict).
         const uint64_t k0 = child_key(dist[i0], child[i0]);
         const uint64_t k1 = child_key(dist[i1], child[i1]);
+        prefetch_child(bvh, key_ref(std::max(k0, k1)));
         stack[sp++] = std::max(k0, k1);
         cur = key_ref(std::min(k0, k1));
         continue;
@@ -251,10 +294,12 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
         // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
         const __m512i keys = _mm512_or_si512(
             _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
-            _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_load_si256(reinterpret_cast<const __m256i*>(child))));
+            _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
+                                                                 _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
         __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
         sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
         _mm512_storeu_si512(stack + sp, sorted);
+        for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
         sp += k - 1;
         cur = key_ref(stack[sp]);
         continue;

@@ -70,7 +70,7 @@ struct BlockHits {
 // Tests all W lanes; returns the mask of lanes hit with tmin <= t <= tmax and
 // fills t, u, v for them.
 template <int W>
-inline uint32_t intersect_block(const TriangleBlock<W>& blk, const BlockRay<W>& r, float tmin, float tmax,
+[[gnu::always_inline]] inline uint32_t intersect_block(const TriangleBlock<W>& blk, const BlockRay<W>& r, float tmin, float tmax,
                                 BlockHits<W>& out) {
   using V = simd::vfloat<W>;
   const float* p0 = &blk.v[0][0][0];
