@@ -192,7 +192,7 @@ class BinnedBuilder {
   void build(uint32_t node, size_t b, size_t e, const Box4& bounds, const Box4& cbounds, int depth, BuildRef* cur,
              BuildRef* other) {
     const size_t n = e - b;
-    if (n <= 1) return make_leaf(node, cur, b, e, bounds);
+    if (n <= static_cast<size_t>(std::max(1, opt_.leaf_threshold))) return make_leaf(node, cur, b, e, bounds);
 
     alignas(16) float cext[4];
     _mm_store_ps(cext, _mm_sub_ps(cbounds.hi, cbounds.lo));

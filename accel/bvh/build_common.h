@@ -106,6 +106,10 @@ std::vector<BuildRef> make_build_refs(std::span<const Aabb> boxes, std::span<con
 struct BuildOptions {
   int bins = 32;          // bins per axis (binned SAH, SBVH)
   int max_leaf = 1;       // leaves never hold more references than this
+  // Ranges of at most this many references always become leaves (no SAH
+  // test): the SAH-optimal collapse merges small leaves anyway, so building
+  // the last levels of single-reference leaves is mostly wasted time.
+  int leaf_threshold = 1;
   float traversal_cost = 1.0f;     // C_t used for split decisions
   float intersection_cost = 1.0f;  // C_i used for split decisions (per reference)
 };

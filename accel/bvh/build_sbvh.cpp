@@ -325,7 +325,7 @@ class SbvhBuilder {
 
   void build(uint32_t node, std::vector<BuildRef> refs, const Box4& bounds, const Box4& cbounds, int depth) {
     const size_t n = refs.size();
-    if (n <= 1) return make_leaf(node, refs, bounds);
+    if (n <= static_cast<size_t>(std::max(1, opt_.base.leaf_threshold))) return make_leaf(node, refs, bounds);
 
     alignas(16) float cext[4];
     _mm_store_ps(cext, _mm_sub_ps(cbounds.hi, cbounds.lo));

@@ -97,7 +97,7 @@ class SweepBuilder {
 
   void build(uint32_t node, size_t b, size_t e, const Aabb& bounds, int depth) {
     const size_t n = e - b;
-    if (n <= 1) return make_leaf(node, b, e, bounds);
+    if (n <= static_cast<size_t>(std::max(1, opt_.leaf_threshold))) return make_leaf(node, b, e, bounds);
     AxisBest best[3];
     if (n >= kParallelAxisSize) {
       tbb::parallel_invoke([&] { best[0] = sweep(0, b, e); }, [&] { best[1] = sweep(1, b, e); },

@@ -41,6 +41,7 @@ struct BvhConfig {
   int leaf = 0;           // max references per leaf (0 = layout default)
   int block = 0;          // triangles per SIMD block (0 = layout default)
   int bins = 32;
+  int binary_leaf = 1;        // ranges this small become binary leaves without SAH test
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
   double opt_ms = 500.0;      // reinsertion time budget
@@ -154,6 +155,7 @@ class BvhAccel final : public Accelerator {
     BuildOptions bo;
     bo.bins = cfg_.bins;
     bo.max_leaf = 1;  // leaves are formed by the SAH-optimal collapse
+    bo.leaf_threshold = std::min(cfg_.binary_leaf, leaf);
     Timer phase;
     BinaryBvh tree;
     switch (cfg_.builder) {
@@ -264,6 +266,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"leaf", "0", "max triangles per leaf (0 = layout default: bvh2 4, wide 2 blocks)"},
        {"block", "4", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
        {"bins", "32", "SAH bins per axis (2..256)"},
+       {"bleaf", "1", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
        {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
        {"opt_ms", "500", "reinsert: time budget in ms"},
@@ -284,6 +287,8 @@ AcceleratorInfo bvh_accelerator_info() {
         const int max_leaf = c.layout == LayoutKind::Bvh2 ? 255 : static_cast<int>(wide_ref::kMaxBlocks) * c.block;
         if (c.leaf < 1 || c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
         c.bins = p.integer("bins");
+        c.binary_leaf = p.integer("bleaf");
+        if (c.binary_leaf < 1 || c.binary_leaf > 16) throw SpecError("bvh: bleaf must be in 1..16");
         if (c.bins < 2 || c.bins > 256) throw SpecError("bvh: bins must be in 2..256");
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("budget"));
