@@ -2,8 +2,11 @@
 
 #include <algorithm>
 
+#include <functional>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace raylab {
 
@@ -85,6 +88,23 @@ TreeShape measure_tree(std::span<const Bvh2Node> nodes) {
   s.avg_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
   s.sah_cost = root_area > 0.0 ? cost / root_area : 0.0;
   return s;
+}
+
+double tree_sah_cost(std::span<const Bvh2Node> nodes) {
+  if (nodes.empty()) return 0.0;
+  const double total = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, nodes.size(), 16384), 0.0,
+      [&](const tbb::blocked_range<size_t>& r, double acc) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const Bvh2Node& n = nodes[i];
+          const double area = n.bounds().half_area();
+          acc += (n.is_leaf() || n.index == 0) ? kSahIntersectionCost * area * n.count : kSahTraversalCost * area;
+        }
+        return acc;
+      },
+      std::plus<double>());
+  const double root_area = nodes[0].bounds().half_area();
+  return root_area > 0.0 ? total / root_area : 0.0;
 }
 
 }  // namespace raylab

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -13,46 +14,80 @@
 
 namespace raylab {
 
-void TriangleSplitter::split(uint32_t prim, const Aabb& box, int axis, float pos, Aabb& left, Aabb& right) const {
-  left = Aabb::empty();
-  right = Aabb::empty();
-  const Vec3f* v[3] = {&mesh_.vertex(prim, 0), &mesh_.vertex(prim, 1), &mesh_.vertex(prim, 2)};
+namespace {
+
+// Neighbouring floats without libm calls (x finite).
+inline float next_up(float x) {
+  if (x == 0.0f) return std::numeric_limits<float>::denorm_min();
+  uint32_t u;
+  std::memcpy(&u, &x, sizeof u);
+  u = x > 0.0f ? u + 1 : u - 1;
+  std::memcpy(&x, &u, sizeof u);
+  return x;
+}
+inline float next_down(float x) { return -next_up(-x); }
+
+}  // namespace
+
+void TriangleSplitter::split(uint32_t prim, const Aabb& box, int axis, float pos, bool conservative, Aabb& left,
+                             Aabb& right) const {
+  float llo[3], lhi[3], rlo[3], rhi[3];
+  for (int a = 0; a < 3; ++a) {
+    llo[a] = rlo[a] = std::numeric_limits<float>::infinity();
+    lhi[a] = rhi[a] = -std::numeric_limits<float>::infinity();
+  }
+  auto add = [](float* lo, float* hi, const float* p) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  };
+  float v[3][3];
+  for (int c = 0; c < 3; ++c)
+    for (int a = 0; a < 3; ++a) v[c][a] = mesh_.vertex(prim, c)[a];
   for (int i = 0; i < 3; ++i) {
-    const Vec3f& p = *v[i];
-    const Vec3f& q = *v[(i + 1) % 3];
+    const float* p = v[i];
+    const float* q = v[i == 2 ? 0 : i + 1];
     const float pa = p[axis], qa = q[axis];
-    if (pa <= pos) left.extend(p);
-    if (pa >= pos) right.extend(p);
+    if (pa <= pos) add(llo, lhi, p);
+    if (pa >= pos) add(rlo, rhi, p);
     if ((pa < pos && qa > pos) || (pa > pos && qa < pos)) {
-      // Crossing point in double, widened by one float step each way so the
-      // boxes enclose the exact crossing.
-      const double t = (static_cast<double>(pos) - pa) / (static_cast<double>(qa) - pa);
-      Vec3f lo, hi;
-      for (int a = 0; a < 3; ++a) {
-        if (a == axis) {
-          lo[a] = hi[a] = pos;
-          continue;
+      float lo[3], hi[3];
+      if (conservative) {
+        // Crossing point in double, widened by one float step each way so
+        // the boxes enclose the exact crossing.
+        const double t = (static_cast<double>(pos) - pa) / (static_cast<double>(qa) - pa);
+        for (int a = 0; a < 3; ++a) {
+          if (a == axis) {
+            lo[a] = hi[a] = pos;
+            continue;
+          }
+          const float f = static_cast<float>(static_cast<double>(p[a]) + t * (static_cast<double>(q[a]) - p[a]));
+          lo[a] = next_down(f);
+          hi[a] = next_up(f);
         }
-        const double x = static_cast<double>(p[a]) + t * (static_cast<double>(q[a]) - p[a]);
-        const float f = static_cast<float>(x);
-        lo[a] = std::nextafter(f, -std::numeric_limits<float>::infinity());
-        hi[a] = std::nextafter(f, std::numeric_limits<float>::infinity());
+      } else {
+        const float t = (pos - pa) / (qa - pa);
+        for (int a = 0; a < 3; ++a) lo[a] = hi[a] = a == axis ? pos : p[a] + t * (q[a] - p[a]);
       }
-      left.extend(lo), left.extend(hi);
-      right.extend(lo), right.extend(hi);
+      add(llo, lhi, lo), add(llo, lhi, hi);
+      add(rlo, rhi, lo), add(rlo, rhi, hi);
     }
   }
   // Keep each part inside the reference's box and on its side of the plane.
-  auto clip = [&](Aabb& b, bool is_left) {
-    if (b.is_empty()) return;
-    b.lo = b.lo.cwiseMax(box.lo);
-    b.hi = b.hi.cwiseMin(box.hi);
-    if (is_left) b.hi[axis] = std::min(b.hi[axis], pos);
-    else b.lo[axis] = std::max(b.lo[axis], pos);
-    if (b.is_empty()) b = Aabb::empty();
+  auto finish = [&](const float* lo, const float* hi, bool is_left, Aabb& out) {
+    Vec3f l, h;
+    for (int a = 0; a < 3; ++a) {
+      l[a] = std::max(lo[a], box.lo[a]);
+      h[a] = std::min(hi[a], box.hi[a]);
+    }
+    if (is_left) h[axis] = std::min(h[axis], pos);
+    else l[axis] = std::max(l[axis], pos);
+    out = Aabb(l, h);
+    if (out.is_empty()) out = Aabb::empty();
   };
-  clip(left, true);
-  clip(right, false);
+  finish(llo, lhi, true, left);
+  finish(rlo, rhi, false, right);
 }
 
 namespace {
@@ -197,7 +232,7 @@ class SbvhBuilder {
       Aabb rest = r.box.aabb();
       for (int b = b0; b < b1; ++b) {
         Aabb l, rr;
-        splitter_.split(prim, rest, a, g.plane(a, b + 1), l, rr);
+        splitter_.split(prim, rest, a, g.plane(a, b + 1), false, l, rr);
         if (!l.is_empty()) sb.add(a, b, Box4::from(l));
         rest = rr;
         if (rest.is_empty()) break;
@@ -307,7 +342,7 @@ class SbvhBuilder {
         continue;
       }
       Aabb l, rr;
-      splitter_.split(r.prim(), r.box.aabb(), a, s.pos, l, rr);
+      splitter_.split(r.prim(), r.box.aabb(), a, s.pos, true, l, rr);
       const uint32_t prim = r.prim();
       if (!l.is_empty()) left.push_back(BuildRef::make(l, l.center(), prim));
       if (!rr.is_empty()) right.push_back(BuildRef::make(rr, rr.center(), prim));
@@ -340,7 +375,8 @@ class SbvhBuilder {
       object = sah::find_binned_split(*bins, *bn, opt_.base.bins);
     }
     SpatialSplit spatial;
-    if (depth < kForceMedianDepth && budget_.load(std::memory_order_relaxed) > 0 && root_area_ > 0.0f) {
+    if (depth < kForceMedianDepth && n >= opt_.min_spatial_refs && budget_.load(std::memory_order_relaxed) > 0 &&
+        root_area_ > 0.0f) {
       float overlap = 0.0f;
       if (object.axis >= 0) {
         Box4 inter;

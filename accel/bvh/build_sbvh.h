@@ -23,20 +23,23 @@ namespace raylab {
 
 // Cuts primitive `prim`, restricted to `box`, by the plane x[axis] = pos and
 // returns the boxes of the parts on either side (each inside `box`, empty
-// when that side holds nothing). The boxes must enclose the parts: round
-// outward.
+// when that side holds nothing). With `conservative` the boxes must enclose
+// the parts (round outward): they become the boxes of new references.
+// Without it they only estimate split costs and may be off by rounding.
 class PrimitiveSplitter {
  public:
   virtual ~PrimitiveSplitter() = default;
-  virtual void split(uint32_t prim, const Aabb& box, int axis, float pos, Aabb& left, Aabb& right) const = 0;
+  virtual void split(uint32_t prim, const Aabb& box, int axis, float pos, bool conservative, Aabb& left,
+                     Aabb& right) const = 0;
 };
 
 // Triangles: the polygon's vertices on each side plus its edges' crossings
-// of the plane (computed in double, rounded outward to float).
+// of the plane (conservative: computed in double, rounded outward to float).
 class TriangleSplitter final : public PrimitiveSplitter {
  public:
   explicit TriangleSplitter(const TriangleMesh& mesh) : mesh_(mesh) {}
-  void split(uint32_t prim, const Aabb& box, int axis, float pos, Aabb& left, Aabb& right) const override;
+  void split(uint32_t prim, const Aabb& box, int axis, float pos, bool conservative, Aabb& left,
+             Aabb& right) const override;
 
  private:
   const TriangleMesh& mesh_;
@@ -47,6 +50,10 @@ struct SbvhOptions {
   float alpha = 1e-5f;        // overlap threshold (fraction of the root's surface area)
   float split_budget = 0.5f;  // extra references allowed, as a fraction of the primitive count
   int spatial_bins = 32;      // slabs per axis for spatial splits
+  // Spatial splits are only tried at nodes with at least this many
+  // references: they pay off where large triangles straddle big nodes, and
+  // trying them at every small node dominates build time.
+  size_t min_spatial_refs = 0;
 };
 
 struct SbvhStats {

@@ -44,6 +44,7 @@ struct BvhConfig {
   int binary_leaf = 1;        // ranges this small become binary leaves without SAH test
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
+  int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
   double opt_ms = 500.0;      // reinsertion time budget
   float node_cost = 1.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
@@ -139,14 +140,29 @@ class BvhAccel final : public Accelerator {
     Timer timer;
     BuildStats s;
     const size_t n = mesh.num_triangles();
-    std::vector<Aabb> boxes(n);
-    std::vector<Vec3f> centroids(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        boxes[i] = mesh.triangle_bounds(i);
-        centroids[i] = boxes[i].center();
-      }
-    });
+    // Triangle boxes and centroids (box centres); the binned builder takes
+    // its references directly, the other builders the two arrays.
+    std::vector<Aabb> boxes;
+    std::vector<Vec3f> centroids;
+    std::vector<BuildRef> refs;
+    if (cfg_.builder == BuilderKind::Binned) {
+      refs.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const Aabb b = mesh.triangle_bounds(i);
+          refs[i] = BuildRef::make(b, b.center(), static_cast<uint32_t>(i));
+        }
+      });
+    } else {
+      boxes.resize(n);
+      centroids.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          boxes[i] = mesh.triangle_bounds(i);
+          centroids[i] = boxes[i].center();
+        }
+      });
+    }
 
     const int width = layout_width(cfg_.layout);
     const int block = cfg_.layout == LayoutKind::Bvh2 ? 1 : cfg_.block;
@@ -156,10 +172,11 @@ class BvhAccel final : public Accelerator {
     bo.bins = cfg_.bins;
     bo.max_leaf = 1;  // leaves are formed by the SAH-optimal collapse
     bo.leaf_threshold = std::min(cfg_.binary_leaf, leaf);
+    s.extra["ms_prepare"] = timer.ms();
     Timer phase;
     BinaryBvh tree;
     switch (cfg_.builder) {
-      case BuilderKind::Binned: tree = build_binned_sah(boxes, centroids, bo); break;
+      case BuilderKind::Binned: tree = build_binned_sah(std::move(refs), bo); break;
       case BuilderKind::Sweep: tree = build_sweep_sah(boxes, centroids, bo); break;
       case BuilderKind::Lbvh: tree = build_lbvh(boxes, centroids); break;
       case BuilderKind::Sbvh: {
@@ -167,6 +184,7 @@ class BvhAccel final : public Accelerator {
         so.base = bo;
         so.alpha = cfg_.alpha;
         so.split_budget = cfg_.split_budget;
+        so.min_spatial_refs = static_cast<size_t>(cfg_.spatial_min);
         SbvhStats ss;
         tree = build_sbvh(boxes, centroids, TriangleSplitter(mesh), so, &ss);
         s.extra["spatial_splits"] = static_cast<double>(ss.spatial_splits);
@@ -186,10 +204,12 @@ class BvhAccel final : public Accelerator {
       s.extra["opt_rounds"] = rs.rounds;
       s.extra["opt_moves"] = static_cast<double>(rs.moves);
     }
-    const TreeShape tree_shape = measure_tree(tree.nodes);
-    s.extra["sah_tree"] = tree_shape.sah_cost;
-    if (tree_shape.max_depth > kMaxTreeDepth)
-      throw std::runtime_error(fmt::format("bvh: tree depth {} exceeds {}", tree_shape.max_depth, kMaxTreeDepth));
+    phase.reset();
+    // Builders bound the depth (median splits beyond kForceMedianDepth, LBVH
+    // by its key length, reinsertion by rejecting deeper results); the wide
+    // layouts check their depth against the stack below.
+    s.extra["sah_tree"] = tree_sah_cost(tree.nodes);
+    s.extra["ms_measure"] = phase.ms();
 
     phase.reset();
     CollapseOptions co;
@@ -269,6 +289,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"bleaf", "1", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
        {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
+       {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
        {"opt_ms", "500", "reinsert: time budget in ms"},
        {"ct", "1", "collapse SAH cost of a node visit"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
@@ -293,6 +314,8 @@ AcceleratorInfo bvh_accelerator_info() {
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("budget"));
         c.opt_ms = p.real("opt_ms");
+        c.spatial_min = p.integer("smin");
+        if (c.spatial_min < 0) throw SpecError("bvh: smin must be >= 0");
         if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
           throw SpecError("bvh: alpha must be >= 0 and budget in 0..4");
         if (!(c.opt_ms >= 0.0 && c.opt_ms <= 1e6)) throw SpecError("bvh: opt_ms must be in 0..1e6");

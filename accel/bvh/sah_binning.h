@@ -106,20 +106,45 @@ struct Split {
 };
 
 
-inline void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& bn, BinSet& bins) {
-  for (size_t i = b; i < e; ++i) {
-    const BuildRef& r = refs[i];
-    alignas(16) int32_t idx[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
-    for (int a = 0; a < 3; ++a) bins.add(a, idx[a], r.box);
+inline void bin_one(const BuildRef& r, const Binning& bn, BinSet& bins) {
+  alignas(16) int32_t idx[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
+  for (int a = 0; a < 3; ++a) bins.add(a, idx[a], r.box);
+}
+
+// Bins refs[b, e) into `bins` (which must be initialised for nbins). Long
+// ranges alternate between two bin sets: consecutive references often land
+// in the same bin, and each update waits for the previous one's store.
+inline void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& bn, BinSet& bins, int nbins) {
+  if (e - b < 256) {
+    for (size_t i = b; i < e; ++i) bin_one(refs[i], bn, bins);
+    return;
   }
+  thread_local std::unique_ptr<BinSet> second;
+  if (!second) second.reset(new BinSet);
+  BinSet& other = *second;
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < nbins; ++k) {
+      other.lo[a][k] = inf;
+      other.hi[a][k] = ninf;
+      other.count[a][k] = 0;
+    }
+  size_t i = b;
+  for (; i + 1 < e; i += 2) {
+    bin_one(refs[i], bn, bins);
+    bin_one(refs[i + 1], bn, other);
+  }
+  if (i < e) bin_one(refs[i], bn, bins);
+  bins.merge_from(other, nbins);
 }
 
 // Bins refs[b, e) (in parallel when the range is large).
 inline std::unique_ptr<BinSet> bin_refs(const BuildRef* refs, size_t b, size_t e, const Binning& bn, int nbins) {
   if (e - b < kParallelBinSize) {
     auto bins = BinSet::make(nbins);
-    bin_range(refs, b, e, bn, *bins);
+    bin_range(refs, b, e, bn, *bins, nbins);
     return bins;
   }
   struct Reducer {
@@ -129,7 +154,7 @@ inline std::unique_ptr<BinSet> bin_refs(const BuildRef* refs, size_t b, size_t e
     std::unique_ptr<BinSet> bins;
     Reducer(const BuildRef* r, const Binning* b, int nb) : refs(r), bn(b), nbins(nb), bins(BinSet::make(nb)) {}
     Reducer(Reducer& o, tbb::split) : Reducer(o.refs, o.bn, o.nbins) {}
-    void operator()(const tbb::blocked_range<size_t>& r) { bin_range(refs, r.begin(), r.end(), *bn, *bins); }
+    void operator()(const tbb::blocked_range<size_t>& r) { bin_range(refs, r.begin(), r.end(), *bn, *bins, nbins); }
     void join(const Reducer& o) { bins->merge_from(*o.bins, nbins); }
   } red(refs, &bn, nbins);
   tbb::parallel_reduce(tbb::blocked_range<size_t>(b, e, 16384), red);
