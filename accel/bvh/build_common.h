@@ -110,6 +110,7 @@ struct BuildOptions {
   // test): the SAH-optimal collapse merges small leaves anyway, so building
   // the last levels of single-reference leaves is mostly wasted time.
   int leaf_threshold = 1;
+  int start_depth = 0;    // depth of the root (when building a subtree of a larger tree)
   float traversal_cost = 1.0f;     // C_t used for split decisions
   float intersection_cost = 1.0f;  // C_i used for split decisions (per reference)
 };

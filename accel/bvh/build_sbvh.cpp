@@ -10,6 +10,7 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
+#include "accel/bvh/build_binned_sah.h"
 #include "accel/bvh/sah_binning.h"
 
 namespace raylab {
@@ -150,13 +151,20 @@ struct SpatialSplit {
 struct SlabGrid {
   float lo[3], width[3], inv_width[3];
   int bins;
+  // Only the node's widest axis gets slabs: long nodes are where large
+  // straddling triangles matter, and three axes triple the clipping work.
   SlabGrid(const Box4& bounds, int n) : bins(n) {
+    int widest = 0;
+    float widest_ext = -1.0f;
     for (int a = 0; a < 3; ++a) {
       lo[a] = bounds.lo_at(a);
       const float ext = bounds.hi_at(a) - lo[a];
       width[a] = ext / static_cast<float>(n);
       inv_width[a] = ext > 0.0f ? static_cast<float>(n) / ext : 0.0f;
+      if (ext > widest_ext) widest_ext = ext, widest = a;
     }
+    for (int a = 0; a < 3; ++a)
+      if (a != widest) inv_width[a] = 0.0f;
   }
   int bin(int a, float x) const {
     const int b = static_cast<int>((x - lo[a]) * inv_width[a]);
@@ -358,8 +366,29 @@ class SbvhBuilder {
     }
   }
 
+  // Below min_spatial_refs no spatial split is tried: the subtree is built
+  // by the binned builder and spliced in (node and reference ranges taken
+  // from this tree's counters, indices shifted).
+  void build_binned_subtree(uint32_t node, std::vector<BuildRef> refs, int depth) {
+    BuildOptions bo = opt_.base;
+    bo.start_depth = depth;
+    const BinaryBvh sub = build_binned_sah(std::move(refs), bo);
+    const uint32_t m = static_cast<uint32_t>(sub.nodes.size());
+    const uint32_t node_base = m > 1 ? next_node_.fetch_add(m - 1) : 0;
+    const uint32_t prim_base = next_prim_.fetch_add(static_cast<uint32_t>(sub.prim_ids.size()));
+    std::copy(sub.prim_ids.begin(), sub.prim_ids.end(), prims_.begin() + prim_base);
+    for (uint32_t k = 0; k < m; ++k) {
+      Bvh2Node nd = sub.nodes[k];
+      if (nd.count != 0 || nd.index == 0) nd.index += prim_base;  // leaf
+      else nd.index = node_base + nd.index - 1;                   // inner: children k >= 1 move to node_base + k - 1
+      nodes_[k == 0 ? node : node_base + k - 1] = nd;
+    }
+  }
+
   void build(uint32_t node, std::vector<BuildRef> refs, const Box4& bounds, const Box4& cbounds, int depth) {
     const size_t n = refs.size();
+    if (n < opt_.min_spatial_refs && n > static_cast<size_t>(std::max(1, opt_.base.leaf_threshold)))
+      return build_binned_subtree(node, std::move(refs), depth);
     if (n <= static_cast<size_t>(std::max(1, opt_.base.leaf_threshold))) return make_leaf(node, refs, bounds);
 
     alignas(16) float cext[4];

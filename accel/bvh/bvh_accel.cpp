@@ -45,6 +45,7 @@ struct BvhConfig {
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
+  int spatial_bins = 32;      // SBVH: slabs per axis
   double opt_ms = 500.0;      // reinsertion time budget
   float node_cost = 1.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
@@ -185,6 +186,7 @@ class BvhAccel final : public Accelerator {
         so.alpha = cfg_.alpha;
         so.split_budget = cfg_.split_budget;
         so.min_spatial_refs = static_cast<size_t>(cfg_.spatial_min);
+        so.spatial_bins = cfg_.spatial_bins;
         SbvhStats ss;
         tree = build_sbvh(boxes, centroids, TriangleSplitter(mesh), so, &ss);
         s.extra["spatial_splits"] = static_cast<double>(ss.spatial_splits);
@@ -290,6 +292,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
        {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
        {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
+       {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)"},
        {"opt_ms", "500", "reinsert: time budget in ms"},
        {"ct", "1", "collapse SAH cost of a node visit"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
@@ -315,6 +318,8 @@ AcceleratorInfo bvh_accelerator_info() {
         c.split_budget = static_cast<float>(p.real("budget"));
         c.opt_ms = p.real("opt_ms");
         c.spatial_min = p.integer("smin");
+        c.spatial_bins = p.integer("sbins");
+        if (c.spatial_bins < 2 || c.spatial_bins > 256) throw SpecError("bvh: sbins must be in 2..256");
         if (c.spatial_min < 0) throw SpecError("bvh: smin must be >= 0");
         if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
           throw SpecError("bvh: alpha must be >= 0 and budget in 0..4");

@@ -187,12 +187,19 @@ template <int N>
 // Prefetches what visiting `ref` will read first: a node's plane arrays, or a
 // leaf's first triangle block. Children are prefetched when pushed, so they
 // are (more likely) in cache when popped.
+#ifndef RAYLAB_PF_NODE
+#define RAYLAB_PF_NODE 4
+#define RAYLAB_PF_LEAF 5
+#endif
+inline constexpr int kPrefetchNodeLines = RAYLAB_PF_NODE;
+inline constexpr int kPrefetchLeafLines = RAYLAB_PF_LEAF;
+
 template <int N, int W>
 [[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
   const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
                                          : reinterpret_cast<const char*>(bvh.nodes + ref);
-  constexpr int kLines = 3;
-  for (int i = 0; i < kLines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
+  const int lines = wide_ref::is_leaf(ref) ? kPrefetchLeafLines : kPrefetchNodeLines;
+  for (int i = 0; i < lines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
 template <int N, int W, bool kAnyHit, bool kCount>
