@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 
@@ -161,7 +162,7 @@ class BinnedBuilder {
       for (int i = 1; i < n; ++i) {
         left.extend(refs[b + o[i - 1]].box);
         const float cost = left.half_area() * static_cast<float>(i) + right_area[i] * static_cast<float>(n - i);
-        if (cost < best.cost) {
+        if (cost < best.cost || (cost == best.cost && std::abs(2 * i - n) < std::abs(2 * best.pos - n))) {
           best.cost = cost;
           best.axis = a;
           best.pos = i;

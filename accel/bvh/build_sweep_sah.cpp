@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 
@@ -82,7 +83,9 @@ class SweepBuilder {
     for (size_t i = b + 1; i < e; ++i) {
       left.extend(boxes_[o[i - 1]]);
       const float cost = left.half_area() * static_cast<float>(i - b) + area[i - b] * static_cast<float>(e - i);
-      if (cost < best.cost) {
+      // Equal costs (e.g. identical boxes) prefer the more balanced split.
+      const auto imbalance = [&](size_t k) { return std::abs(2 * static_cast<long>(k) - static_cast<long>(e - b)); };
+      if (cost < best.cost || (cost == best.cost && imbalance(i - b) < imbalance(best.split))) {
         best.cost = cost;
         best.split = i - b;
       }

@@ -24,8 +24,8 @@ namespace raylab {
 struct ReinsertionOptions {
   double time_budget_ms = 500.0;  // wall-clock bound for the whole optimisation
   int max_rounds = 32;
-  double batch_fraction = 0.05;   // nodes considered per round, as a fraction of all nodes
-  double min_gain = 1e-3;         // stop when a round improves the SAH cost by less (relative)
+  double batch_fraction = 0.15;   // nodes considered per round, as a fraction of all nodes
+  double min_gain = 2e-4;         // stop when a round improves the SAH cost by less (relative)
 };
 
 struct ReinsertionStats {

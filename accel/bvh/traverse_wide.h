@@ -30,6 +30,12 @@
 
 namespace raylab {
 
+#if defined(RAYLAB_SIMD_FMA)
+#define RAYLAB_HAS_FMA 1
+#else
+#define RAYLAB_HAS_FMA 0
+#endif
+
 // Stack capacity in entries; builds whose depth could exceed it are rejected
 // (see wide_stack_fits).
 inline constexpr int kWideStackSize = 1024;
@@ -53,11 +59,20 @@ struct WideNodeRay {
   V inv[3];
 #if defined(RAYLAB_SIMD_FMA)
   V near_shift[3], far_shift[3];  // -(o * inv) rounded so near shrinks and far grows
-#else
-  V org[3];
 #endif
+  V org[3];
   int near_off[3], far_off[3];  // float offsets of the near / far plane arrays in a node
 };
+
+// True when some direction component is (nearly) zero. Such a ray can lie
+// exactly in a box's face plane, where (hi - o) * (1 / tiny) = 0 would end
+// the slab at t = 0; these rays take the exact-reciprocal kernel instead:
+// 1 / +-0 = +-inf, and the 0 * inf = NaN of a ray in a face plane is dropped
+// by NaN-ignoring min/max, which leaves that slab unbounded, as it should be.
+inline bool ray_is_axis_parallel(const Ray& r) {
+  constexpr float kTiny = 1e-30f;  // as safe_reciprocal in slab_test.h
+  return std::fabs(r.dir.x()) < kTiny || std::fabs(r.dir.y()) < kTiny || std::fabs(r.dir.z()) < kTiny;
+}
 
 // Everything a traversal needs per ray: the safe reciprocals of the slab test
 // (as SlabRay) and the axis permutation and shear of the watertight test (as
@@ -69,7 +84,9 @@ struct WideRay {
   WideNodeRay<N> node;
   BlockRay<W> tri;
 
-  [[gnu::always_inline]] explicit WideRay(const Ray& r) {
+  // axis_parallel (see ray_is_axis_parallel): exact reciprocals (+-inf for
+  // zero components) for the exact-form kernel; otherwise safe reciprocals.
+  [[gnu::always_inline]] WideRay(const Ray& r, bool axis_parallel) {
     float inv[3], shift_up[3], shift_down[3];
     WatertightRay w;
     w.org = r.org;
@@ -81,7 +98,8 @@ struct WideRay {
     const __m128 tiny = _mm_set1_ps(1e-30f);
     const __m128 small = _mm_cmplt_ps(ad, tiny);
     const __m128 signed_tiny = _mm_or_ps(tiny, _mm_andnot_ps(abs_mask, d));
-    const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), _mm_blendv_ps(d, signed_tiny, small));
+    const __m128 inv4 =
+        _mm_div_ps(_mm_set1_ps(1.0f), axis_parallel ? d : _mm_blendv_ps(d, signed_tiny, small));
     // Dominant axis (ties resolved as in WatertightRay) and permutation.
     alignas(16) float adv[4];
     _mm_store_ps(adv, ad);
@@ -116,7 +134,7 @@ struct WideRay {
     w = WatertightRay(r);
     int neg_mask = 0;
     for (int a = 0; a < 3; ++a) {
-      inv[a] = sr.inv_dir[a];
+      inv[a] = axis_parallel ? 1.0f / r.dir[a] : sr.inv_dir[a];
       neg_mask |= sr.neg[a] << a;
       const float oi = r.org[a] * inv[a];
       const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
@@ -136,10 +154,10 @@ struct WideRay {
       node.near_shift[a] = V::broadcast(-shift_up[a]);
       node.far_shift[a] = V::broadcast(-shift_down[a]);
 #else
-      node.org[a] = V::broadcast(r.org[a]);
       (void)shift_up;
       (void)shift_down;
 #endif
+      node.org[a] = V::broadcast(r.org[a]);
     }
   }
 };
@@ -159,28 +177,39 @@ inline bool wide_ray_valid(const Ray& r) {
 
 // Tests the N child boxes of a node; returns the mask of children whose
 // (padded) slab interval overlaps [tmin, tmax], and their entry distances.
-template <int N>
-[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r, simd::vfloat<N> tmin,
-                                   simd::vfloat<N> tmax, simd::vfloat<N>& tnear) {
+// kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
+// first in min/max (x86 min/max return the second operand when one is NaN),
+// for axis-parallel rays and builds without FMA.
+template <int N, bool kExact>
+[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r,
+                                                          simd::vfloat<N> tmin, simd::vfloat<N> tmax,
+                                                          simd::vfloat<N>& tnear) {
   using V = simd::vfloat<N>;
   const float* b = &node.bounds[0][0];
+  // tmax is padded like the far planes: the computed entry distance may
+  // exceed the true one by a few ulps, and a box holding a hit closer than
+  // the current one by less than that must not be culled.
 #if defined(RAYLAB_SIMD_FMA)
-  const V nx = fmadd(V::load(b + r.near_off[0]), r.inv[0], r.near_shift[0]);
-  const V ny = fmadd(V::load(b + r.near_off[1]), r.inv[1], r.near_shift[1]);
-  const V nz = fmadd(V::load(b + r.near_off[2]), r.inv[2], r.near_shift[2]);
-  const V fx = fmadd(V::load(b + r.far_off[0]), r.inv[0], r.far_shift[0]);
-  const V fy = fmadd(V::load(b + r.far_off[1]), r.inv[1], r.far_shift[1]);
-  const V fz = fmadd(V::load(b + r.far_off[2]), r.inv[2], r.far_shift[2]);
-#else
+  if constexpr (!kExact) {
+    const V nx = fmadd(V::load(b + r.near_off[0]), r.inv[0], r.near_shift[0]);
+    const V ny = fmadd(V::load(b + r.near_off[1]), r.inv[1], r.near_shift[1]);
+    const V nz = fmadd(V::load(b + r.near_off[2]), r.inv[2], r.near_shift[2]);
+    const V fx = fmadd(V::load(b + r.far_off[0]), r.inv[0], r.far_shift[0]);
+    const V fy = fmadd(V::load(b + r.far_off[1]), r.inv[1], r.far_shift[1]);
+    const V fz = fmadd(V::load(b + r.far_off[2]), r.inv[2], r.far_shift[2]);
+    tnear = max(max(nx, ny), max(nz, tmin));
+    const V tfar = min(min(min(fx, fy), fz), tmax) * V::broadcast(kSlabFarScale);
+    return cmp_le(tnear, tfar);
+  }
+#endif
   const V nx = (V::load(b + r.near_off[0]) - r.org[0]) * r.inv[0];
   const V ny = (V::load(b + r.near_off[1]) - r.org[1]) * r.inv[1];
   const V nz = (V::load(b + r.near_off[2]) - r.org[2]) * r.inv[2];
   const V fx = (V::load(b + r.far_off[0]) - r.org[0]) * r.inv[0];
   const V fy = (V::load(b + r.far_off[1]) - r.org[1]) * r.inv[1];
   const V fz = (V::load(b + r.far_off[2]) - r.org[2]) * r.inv[2];
-#endif
-  tnear = max(max(nx, ny), max(nz, tmin));
-  const V tfar = min(min(min(fx, fy), fz) * V::broadcast(kSlabFarScale), tmax);
+  tnear = max(nx, max(ny, max(nz, tmin)));
+  const V tfar = min(fx, min(fy, min(fz, tmax))) * V::broadcast(kSlabFarScale);
   return cmp_le(tnear, tfar);
 }
 
@@ -202,14 +231,12 @@ template <int N, int W>
   for (int i = 0; i < lines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
-template <int N, int W, bool kAnyHit, bool kCount>
-inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
+inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   using V = simd::vfloat<N>;
   Hit hit;
-  if constexpr (kCount) stats->rays++;
-  if (!wide_ray_valid(ray)) return hit;
-
-  const WideRay<N, W> wr(ray);
+  constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
+  const WideRay<N, W> wr(ray, kAxisParallel);
   const WideNodeRay<N>& nr = wr.node;
   const BlockRay<W>& br = wr.tri;
   const float tmin = ray.tmin;
@@ -225,7 +252,7 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
     while (sp > 0) {
       const uint64_t e = stack[--sp];
       if constexpr (!kAnyHit) {
-        if (key_dist(e) > tmax) continue;
+        if (key_dist(e) > tmax * kSlabFarScale) continue;
       }
       cur = key_ref(e);
       return true;
@@ -238,7 +265,7 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
       if constexpr (kCount) stats->nodes_visited++;
       const WideNode<N>& node = bvh.nodes[cur];
       V tnear;
-      uint32_t mask = intersect_children(node, nr, tmin_v, V::broadcast(tmax), tnear);
+      uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(tmax), tnear);
       if (mask == 0) {
         if (!pop()) return hit;
         continue;
@@ -350,6 +377,16 @@ inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalSta
     }
     if (!pop()) return hit;
   }
+}
+
+// The traversal entry point: validity check, then the kernel for the ray's kind.
+template <int N, int W, bool kAnyHit, bool kCount>
+inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+  if constexpr (kCount) stats->rays++;
+  if (!wide_ray_valid(ray)) return Hit{};
+  if (ray_is_axis_parallel(ray)) [[unlikely]]
+    return traverse_wide_kernel<N, W, kAnyHit, kCount, true>(bvh, ray, stats);
+  return traverse_wide_kernel<N, W, kAnyHit, kCount, false>(bvh, ray, stats);
 }
 
 }  // namespace raylab
