@@ -248,11 +248,12 @@ TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
 }
 
 TEST(BvhFamily, RejectsBadParameters) {
-  for (const char* spec : {"bvh:leaf=-1", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt",
+  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt",
                            "bvh:bins=1", "bvh:alpha=-1", "bvh:budget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
                            "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_ms=-1", "bvh:smin=-2", "bvh:nodes=3"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
+  EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
 }
 
 TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {

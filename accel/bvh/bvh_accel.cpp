@@ -285,16 +285,16 @@ AcceleratorInfo bvh_accelerator_info() {
       {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)"},
        {"layout", "bvh8", "traversal layout: bvh2, bvh4 or bvh8"},
        {"opt", "none", "post-build optimisation: none or reinsert"},
-       {"leaf", "0", "max triangles per leaf (0 = layout default: bvh2 4, wide 2 blocks)"},
-       {"block", "4", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
+       {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)"},
+       {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
        {"bins", "32", "SAH bins per axis (2..256)"},
-       {"bleaf", "1", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
+       {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
        {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
        {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)"},
        {"opt_ms", "500", "reinsert: time budget in ms"},
-       {"ct", "1", "collapse SAH cost of a node visit"},
+       {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
        {"tri", "watertight", "triangle test: watertight (Woop et al. 2013); mt (Moller-Trumbore) with layout=bvh2 only"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
@@ -306,8 +306,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.reinsert = p.choice("opt", {"none", "reinsert"}) == "reinsert";
         c.block = p.integer("block");
         if (c.block != 4 && c.block != 8 && c.block != 16) throw SpecError("bvh: block must be 4, 8 or 16");
-        c.leaf = p.integer("leaf");
-        if (c.leaf == 0) c.leaf = c.layout == LayoutKind::Bvh2 ? 4 : 2 * c.block;
+        c.leaf = p.str("leaf") == "auto" ? (c.layout == LayoutKind::Bvh2 ? 4 : 2 * c.block) : p.integer("leaf");
         const int max_leaf = c.layout == LayoutKind::Bvh2 ? 255 : static_cast<int>(wide_ref::kMaxBlocks) * c.block;
         if (c.leaf < 1 || c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
         c.bins = p.integer("bins");
