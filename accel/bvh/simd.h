@@ -119,6 +119,27 @@ struct vfloat {
   RAYLAB_VF_CMP(cmp_eq, ==)
   RAYLAB_VF_CMP(cmp_neq, !=)
 #undef RAYLAB_VF_CMP
+  // Float min/max through the integer order of the bits (see vfloat<8>).
+  friend vfloat min_bits(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      int32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      r.v[i] = x < y ? a.v[i] : b.v[i];
+    }
+    return r;
+  }
+  friend vfloat max_bits(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      int32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      r.v[i] = x > y ? a.v[i] : b.v[i];
+    }
+    return r;
+  }
   // min/max with the x86 convention: the second operand wins when either is NaN.
   friend vfloat min(const vfloat& a, const vfloat& b) {
     vfloat r;
@@ -151,6 +172,25 @@ struct vfloat<4> {
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm_div_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm_max_ps(a.v, b.v)}; }
+#if defined(__SSE4_1__)
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm_castsi128_ps(_mm_min_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm_castsi128_ps(_mm_max_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
+  }
+#else
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    const __m128i x = _mm_castps_si128(a.v), y = _mm_castps_si128(b.v);
+    const __m128i lt = _mm_cmplt_epi32(x, y);
+    return {_mm_castsi128_ps(_mm_or_si128(_mm_and_si128(lt, x), _mm_andnot_si128(lt, y)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    const __m128i x = _mm_castps_si128(a.v), y = _mm_castps_si128(b.v);
+    const __m128i gt = _mm_cmpgt_epi32(x, y);
+    return {_mm_castsi128_ps(_mm_or_si128(_mm_and_si128(gt, x), _mm_andnot_si128(gt, y)))};
+  }
+#endif
 #if defined(RAYLAB_SIMD_AVX512)
   friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
   friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
@@ -192,6 +232,20 @@ struct vfloat<8> {
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm256_div_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm256_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm256_max_ps(a.v, b.v)}; }
+  // min/max by the signed-integer order of the bits: equal to float min/max
+  // when both are >= +0, and a negative input always wins min / loses max.
+  // One cycle instead of four (Embree's slab test uses the same trick).
+#if defined(__AVX2__)
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm256_castsi256_ps(_mm256_min_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm256_castsi256_ps(_mm256_max_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
+  }
+#else
+  friend vfloat min_bits(vfloat a, vfloat b) { return min(a, b); }
+  friend vfloat max_bits(vfloat a, vfloat b) { return max(a, b); }
+#endif
 #if defined(RAYLAB_SIMD_AVX512)
   friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
   friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
@@ -233,6 +287,12 @@ struct vfloat<16> {
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm512_div_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm512_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm512_max_ps(a.v, b.v)}; }
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm512_castsi512_ps(_mm512_min_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm512_castsi512_ps(_mm512_max_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+  }
   friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
   friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
   friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }

@@ -197,8 +197,13 @@ template <int N, bool kExact>
     const V fx = fmadd(V::load(b + r.far_off[0]), r.inv[0], r.far_shift[0]);
     const V fy = fmadd(V::load(b + r.far_off[1]), r.inv[1], r.far_shift[1]);
     const V fz = fmadd(V::load(b + r.far_off[2]), r.inv[2], r.far_shift[2]);
-    tnear = max(max(nx, ny), max(nz, tmin));
-    const V tfar = min(min(min(fx, fy), fz), tmax) * V::broadcast(kSlabFarScale);
+    // Integer-order min/max (kernel precondition: tmin >= +0). The near
+    // distance includes tmin, so its maximum is >= 0 and exact. A negative
+    // far distance may not be the true minimum, but any negative one culls
+    // the box exactly as the true minimum would. The FMA form never yields
+    // -0 for a far plane (the shift is at least FLT_MIN away from o * inv).
+    tnear = max_bits(max_bits(nx, ny), max_bits(nz, tmin));
+    const V tfar = min_bits(min_bits(fx, fy), min_bits(fz, tmax)) * V::broadcast(kSlabFarScale);
     return cmp_le(tnear, tfar);
   }
 #endif
@@ -241,7 +246,7 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
   const BlockRay<W>& br = wr.tri;
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
-  const V tmin_v = V::broadcast(tmin);
+  const V tmin_v = V::broadcast(tmin == 0.0f ? 0.0f : tmin);  // -0 as +0 for the integer-order min/max
 
   alignas(64) uint64_t stack[kWideStackSize];
   int sp = 0;
@@ -384,7 +389,9 @@ template <int N, int W, bool kAnyHit, bool kCount>
 inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   if constexpr (kCount) stats->rays++;
   if (!wide_ray_valid(ray)) return Hit{};
-  if (ray_is_axis_parallel(ray)) [[unlikely]]
+  // The fast kernel needs finite reciprocals and tmin >= 0 (see
+  // intersect_children); everything else takes the exact form.
+  if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f)) [[unlikely]]
     return traverse_wide_kernel<N, W, kAnyHit, kCount, true>(bvh, ray, stats);
   return traverse_wide_kernel<N, W, kAnyHit, kCount, false>(bvh, ray, stats);
 }
