@@ -119,6 +119,18 @@ struct vfloat {
   RAYLAB_VF_CMP(cmp_eq, ==)
   RAYLAB_VF_CMP(cmp_neq, !=)
 #undef RAYLAB_VF_CMP
+  // ~a & b on the bits (andnot(-0.0, x) = |x|).
+  friend vfloat andnot(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      uint32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      x = ~x & y;
+      std::memcpy(&r.v[i], &x, 4);
+    }
+    return r;
+  }
   // Float min/max through the integer order of the bits (see vfloat<8>).
   friend vfloat min_bits(const vfloat& a, const vfloat& b) {
     vfloat r;
@@ -170,6 +182,7 @@ struct vfloat<4> {
   friend vfloat operator-(vfloat a, vfloat b) { return {_mm_sub_ps(a.v, b.v)}; }
   friend vfloat operator*(vfloat a, vfloat b) { return {_mm_mul_ps(a.v, b.v)}; }
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm_andnot_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm_max_ps(a.v, b.v)}; }
 #if defined(__SSE4_1__)
@@ -230,6 +243,7 @@ struct vfloat<8> {
   friend vfloat operator-(vfloat a, vfloat b) { return {_mm256_sub_ps(a.v, b.v)}; }
   friend vfloat operator*(vfloat a, vfloat b) { return {_mm256_mul_ps(a.v, b.v)}; }
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm256_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm256_andnot_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm256_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm256_max_ps(a.v, b.v)}; }
   // min/max by the signed-integer order of the bits: equal to float min/max
@@ -285,6 +299,7 @@ struct vfloat<16> {
   friend vfloat operator-(vfloat a, vfloat b) { return {_mm512_sub_ps(a.v, b.v)}; }
   friend vfloat operator*(vfloat a, vfloat b) { return {_mm512_mul_ps(a.v, b.v)}; }
   friend vfloat operator/(vfloat a, vfloat b) { return {_mm512_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm512_andnot_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm512_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm512_max_ps(a.v, b.v)}; }
   friend vfloat min_bits(vfloat a, vfloat b) {

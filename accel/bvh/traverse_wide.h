@@ -74,93 +74,67 @@ inline bool ray_is_axis_parallel(const Ray& r) {
   return std::fabs(r.dir.x()) < kTiny || std::fabs(r.dir.y()) < kTiny || std::fabs(r.dir.z()) < kTiny;
 }
 
-// Everything a traversal needs per ray: the safe reciprocals of the slab test
-// (as SlabRay) and the axis permutation and shear of the watertight test (as
-// WatertightRay). Divisions are correctly rounded in vector or scalar form,
-// so the values are identical to the scalar code's. Built without branches
-// when AVX is available: setup is a large share of a short ray's cost.
-template <int N, int W>
-struct WideRay {
-  WideNodeRay<N> node;
-  BlockRay<W> tri;
-
-  // axis_parallel (see ray_is_axis_parallel): exact reciprocals (+-inf for
-  // zero components) for the exact-form kernel; otherwise safe reciprocals.
-  [[gnu::always_inline]] WideRay(const Ray& r, bool axis_parallel) {
-    float inv[3], shift_up[3], shift_down[3];
-    WatertightRay w;
-    w.org = r.org;
+// Per-ray constants of the box test: the reciprocals of the slab test (as
+// SlabRay: safe reciprocals, or exact ones for axis_parallel rays, see
+// ray_is_axis_parallel) and the bounds of o * inv. Division is correctly
+// rounded in vector or scalar form, so the values are the scalar code's.
+// Built without branches when AVX is available: setup is a large share of a
+// short ray's cost. (The triangle test's constants are computed lazily, at
+// the first leaf: many rays never reach one.)
+template <int N>
+[[gnu::always_inline]] inline void init_node_ray(WideNodeRay<N>& node, const Ray& r, bool axis_parallel) {
+  float inv[3], shift_up[3], shift_down[3];
 #if defined(__AVX__)
-    const __m128 d = _mm_setr_ps(r.dir.x(), r.dir.y(), r.dir.z(), 1.0f);
-    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
-    const __m128 ad = _mm_and_ps(d, abs_mask);
-    // Safe reciprocals: components below 1e-30 in magnitude become +-1e-30.
-    const __m128 tiny = _mm_set1_ps(1e-30f);
-    const __m128 small = _mm_cmplt_ps(ad, tiny);
-    const __m128 signed_tiny = _mm_or_ps(tiny, _mm_andnot_ps(abs_mask, d));
-    const __m128 inv4 =
-        _mm_div_ps(_mm_set1_ps(1.0f), axis_parallel ? d : _mm_blendv_ps(d, signed_tiny, small));
-    // Dominant axis (ties resolved as in WatertightRay) and permutation.
-    alignas(16) float adv[4];
-    _mm_store_ps(adv, ad);
-    const int kz = (adv[0] >= adv[1]) ? (adv[0] >= adv[2] ? 0 : 2) : (adv[1] >= adv[2] ? 1 : 2);
-    int kx = kz == 2 ? 0 : kz + 1;
-    int ky = kx == 2 ? 0 : kx + 1;
-    const bool flip = r.dir[kz] < 0.0f;
-    const int tx = flip ? ky : kx, ty = flip ? kx : ky;
-    kx = tx, ky = ty;
-    const __m128 num = _mm_permutevar_ps(d, _mm_setr_epi32(kx, ky, 3, 3));
-    const __m128 den = _mm_permutevar_ps(d, _mm_setr_epi32(kz, kz, kz, 3));
-    alignas(16) float shear[4];
-    _mm_store_ps(shear, _mm_div_ps(num, den));
-    // o * inv bounded from above and below: |oi| * 2^-22 exceeds one ulp, and
-    // FLT_MIN keeps the bounds off zero and out of the denormals. Overflow to
-    // infinity is kept (up) or clamped to FLT_MAX (down) by NaN-first min/max.
-    const __m128 o = _mm_setr_ps(r.org.x(), r.org.y(), r.org.z(), 0.0f);
-    const __m128 oi = _mm_mul_ps(o, inv4);
-    const __m128 delta = _mm_add_ps(_mm_mul_ps(_mm_and_ps(oi, abs_mask), _mm_set1_ps(0x1p-22f)), _mm_set1_ps(FLT_MIN));
-    const __m128 up = _mm_max_ps(_mm_add_ps(oi, delta), _mm_set1_ps(-FLT_MAX));
-    const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
-    alignas(16) float invv[4], upv[4], downv[4];
-    _mm_store_ps(invv, inv4);
-    _mm_store_ps(upv, up);
-    _mm_store_ps(downv, down);
-    for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
-    const int neg_mask = _mm_movemask_ps(d);
-    w.kx = kx, w.ky = ky, w.kz = kz;
-    w.sx = shear[0], w.sy = shear[1], w.sz = shear[2];
+  const __m128 d = _mm_setr_ps(r.dir.x(), r.dir.y(), r.dir.z(), 1.0f);
+  const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+  // Safe reciprocals: components below 1e-30 in magnitude become +-1e-30.
+  const __m128 tiny = _mm_set1_ps(1e-30f);
+  const __m128 small = _mm_cmplt_ps(_mm_and_ps(d, abs_mask), tiny);
+  const __m128 signed_tiny = _mm_or_ps(tiny, _mm_andnot_ps(abs_mask, d));
+  const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), axis_parallel ? d : _mm_blendv_ps(d, signed_tiny, small));
+  // o * inv bounded from above and below: |oi| * 2^-22 exceeds one ulp, and
+  // FLT_MIN keeps the bounds off zero and out of the denormals. Overflow to
+  // infinity is kept (up) or clamped to FLT_MAX (down) by NaN-first min/max.
+  const __m128 o = _mm_setr_ps(r.org.x(), r.org.y(), r.org.z(), 0.0f);
+  const __m128 oi = _mm_mul_ps(o, inv4);
+  const __m128 delta = _mm_add_ps(_mm_mul_ps(_mm_and_ps(oi, abs_mask), _mm_set1_ps(0x1p-22f)), _mm_set1_ps(FLT_MIN));
+  const __m128 up = _mm_max_ps(_mm_add_ps(oi, delta), _mm_set1_ps(-FLT_MAX));
+  const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
+  alignas(16) float invv[4], upv[4], downv[4];
+  _mm_store_ps(invv, inv4);
+  _mm_store_ps(upv, up);
+  _mm_store_ps(downv, down);
+  for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
+  const int neg_mask = _mm_movemask_ps(d);
 #else
-    const SlabRay sr(r);
-    w = WatertightRay(r);
-    int neg_mask = 0;
-    for (int a = 0; a < 3; ++a) {
-      inv[a] = axis_parallel ? 1.0f / r.dir[a] : sr.inv_dir[a];
-      neg_mask |= sr.neg[a] << a;
-      const float oi = r.org[a] * inv[a];
-      const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
-      const float u = oi + delta, dn = oi - delta;
-      shift_up[a] = u == u ? u : -FLT_MAX;
-      shift_down[a] = dn == dn ? dn : FLT_MAX;
-    }
-#endif
-    tri.init(w);
-    using V = simd::vfloat<N>;
-    for (int a = 0; a < 3; ++a) {
-      const int neg = (neg_mask >> a) & 1;
-      node.inv[a] = V::broadcast(inv[a]);
-      node.near_off[a] = (2 * a + neg) * N;
-      node.far_off[a] = (2 * a + 1 - neg) * N;
-#if defined(RAYLAB_SIMD_FMA)
-      node.near_shift[a] = V::broadcast(-shift_up[a]);
-      node.far_shift[a] = V::broadcast(-shift_down[a]);
-#else
-      (void)shift_up;
-      (void)shift_down;
-#endif
-      node.org[a] = V::broadcast(r.org[a]);
-    }
+  const SlabRay sr(r);
+  int neg_mask = 0;
+  for (int a = 0; a < 3; ++a) {
+    inv[a] = axis_parallel ? 1.0f / r.dir[a] : sr.inv_dir[a];
+    neg_mask |= sr.neg[a] << a;
+    const float oi = r.org[a] * inv[a];
+    const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
+    const float u = oi + delta, dn = oi - delta;
+    shift_up[a] = u == u ? u : -FLT_MAX;
+    shift_down[a] = dn == dn ? dn : FLT_MAX;
   }
-};
+#endif
+  using V = simd::vfloat<N>;
+  for (int a = 0; a < 3; ++a) {
+    const int neg = (neg_mask >> a) & 1;
+    node.inv[a] = V::broadcast(inv[a]);
+    node.near_off[a] = (2 * a + neg) * N;
+    node.far_off[a] = (2 * a + 1 - neg) * N;
+#if defined(RAYLAB_SIMD_FMA)
+    node.near_shift[a] = V::broadcast(-shift_up[a]);
+    node.far_shift[a] = V::broadcast(-shift_down[a]);
+#else
+    (void)shift_up;
+    (void)shift_down;
+#endif
+    node.org[a] = V::broadcast(r.org[a]);
+  }
+}
 
 // ray_is_valid(r) && r.tmin <= r.tmax, inline: finite origin and direction,
 // non-zero direction, tmin and tmax not NaN, tmin <= tmax.
@@ -241,9 +215,10 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
   using V = simd::vfloat<N>;
   Hit hit;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
-  const WideRay<N, W> wr(ray, kAxisParallel);
-  const WideNodeRay<N>& nr = wr.node;
-  const BlockRay<W>& br = wr.tri;
+  WideNodeRay<N> nr;
+  init_node_ray(nr, ray, kAxisParallel);
+  BlockRay<W> br;
+  bool br_ready = false;
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
   const V tmin_v = V::broadcast(tmin == 0.0f ? 0.0f : tmin);  // -0 as +0 for the integer-order min/max
@@ -357,6 +332,10 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
     }
 
     // Leaf: test its triangle blocks.
+    if (!br_ready) {
+      br.init(WatertightRay(ray));
+      br_ready = true;
+    }
     const uint32_t nblocks = wide_ref::leaf_blocks(cur);
     const TriangleBlock<W>* blk = bvh.blocks + wide_ref::leaf_first(cur);
     if constexpr (kCount) stats->nodes_visited += nblocks != 0;

@@ -117,6 +117,18 @@ template <int W>
   mask &= cmp_neq(det, zero);
   if (mask == 0) return 0;
   const V tt = u * (r.sz * az0) + v * (r.sz * bz0) + w * (r.sz * cz0);
+  if (tmin >= 0.0f) {
+    // Behind the origin without dividing: where tt and det have opposite
+    // signs, t = tt * (1 / det) is negative, hence < tmin -- unless it
+    // underflows to -0, which needs |tt| < |det| * 2^-100 (those lanes are
+    // left to the full test). Rays leaving a surface meet their own
+    // triangle this way in most leaves they visit.
+    const uint32_t opposite = (cmp_lt(tt, zero) & cmp_gt(det, zero)) | (cmp_gt(tt, zero) & cmp_lt(det, zero));
+    const V abs_mask = V::broadcast(-0.0f);
+    const uint32_t large = cmp_ge(andnot(abs_mask, tt), andnot(abs_mask, det) * V::broadcast(0x1p-100f));
+    mask &= ~(opposite & large);
+    if (mask == 0) return 0;
+  }
   const V inv_det = V::broadcast(1.0f) / det;
   const V t = tt * inv_det;
   mask &= cmp_ge(t, V::broadcast(tmin)) & cmp_le(t, V::broadcast(tmax));
