@@ -12,13 +12,20 @@
 // never falls below it: each is at least as accurate as the subtract-then-
 // multiply form of Ize ("Robust BVH Ray Traversal", JCGT 2013), whose far
 // scaling by 1 + 2*gamma(3) therefore still guarantees that no box the ray
-// really crosses is missed. Without FMA the kernel uses Ize's form directly.
+// really crosses is missed. The reductions use integer min/max on the float
+// bits (valid for tmin >= 0, see intersect_children). Rays with a (nearly)
+// zero direction component or a negative tmin take the exact kernel: Ize's
+// form with exact reciprocals and NaN-ignoring min/max. Without FMA every ray
+// takes that form.
 //
-// Hit children: one is entered directly, two are ordered by one comparison,
-// three or more are sorted by a short sorting network (sort_network.h) and
-// pushed so the nearest is on top. Stack entries are 64-bit keys (distance,
-// child reference) in a fixed array; popped entries farther than the current
-// closest hit are skipped.
+// Closest hit: one hit child is entered directly, two are ordered by one
+// comparison, three or more are sorted by a short sorting network
+// (sort_network.h) and pushed so the nearest is on top. Any hit: leaves
+// first, then descending slot order, no sorting. Pushed children are
+// prefetched. Stack entries are 64-bit keys (distance, child reference) in a
+// fixed array; popped entries farther than the current closest hit are
+// skipped. The triangle test's per-ray constants are computed at the first
+// leaf (many rays never reach one).
 #include <cfloat>
 #include <cstdint>
 
@@ -195,12 +202,8 @@ template <int N, bool kExact>
 // Prefetches what visiting `ref` will read first: a node's plane arrays, or a
 // leaf's first triangle block. Children are prefetched when pushed, so they
 // are (more likely) in cache when popped.
-#ifndef RAYLAB_PF_NODE
-#define RAYLAB_PF_NODE 4
-#define RAYLAB_PF_LEAF 5
-#endif
-inline constexpr int kPrefetchNodeLines = RAYLAB_PF_NODE;
-inline constexpr int kPrefetchLeafLines = RAYLAB_PF_LEAF;
+inline constexpr int kPrefetchNodeLines = 4;  // a 256-byte 8-wide node
+inline constexpr int kPrefetchLeafLines = 5;  // an 8-wide triangle block (320 bytes)
 
 template <int N, int W>
 [[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
@@ -217,7 +220,7 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
   init_node_ray(nr, ray, kAxisParallel);
-  BlockRay<W> br;
+  BlockRay<W> br{};  // filled at the first leaf
   bool br_ready = false;
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
