@@ -63,6 +63,7 @@ Runner add_bench(CLI::App& app) {
     if (tty) std::fprintf(stderr, "\r\033[K");
     std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
                 format_bench_table(records).c_str());
+    std::printf("%s", format_build_summary(records).c_str());
     if (!o->json.empty()) {
       nlohmann::json recs = nlohmann::json::array();
       for (const auto& r : records) recs.push_back(r.to_json());

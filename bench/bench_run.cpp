@@ -35,6 +35,7 @@ nlohmann::json BenchRecord::to_json() const {
   j["nodes"] = nodes;
   j["leaves"] = leaves;
   j["max_depth"] = max_depth;
+  j["extra"] = extra;
   return j;
 }
 
@@ -140,6 +141,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.nodes = b.stats.nodes;
         r.leaves = b.stats.leaves;
         r.max_depth = b.stats.max_depth;
+        r.extra = b.stats.extra;
         records.push_back(r);
       }
     }
@@ -155,6 +157,21 @@ std::string format_bench_table(const std::vector<BenchRecord>& records) {
                      r.accel.size() > 28 ? r.accel.substr(0, 28) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
                      r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, 100.0 * r.embree_agreement,
                      r.nodes_per_ray, r.tris_per_ray);
+  }
+  return s;
+}
+
+std::string format_build_summary(const std::vector<BenchRecord>& records) {
+  std::string s;
+  std::string last;
+  for (const auto& r : records) {
+    if (r.accel == last) continue;
+    last = r.accel;
+    s += fmt::format("build {}: {:.2f} ms, {:.1f} bytes/tri, sah {:.3f}, nodes {}, leaves {}, depth {}", r.accel,
+                     r.build_ms, r.triangles ? static_cast<double>(r.bytes) / r.triangles : 0.0, r.sah_cost, r.nodes,
+                     r.leaves, r.max_depth);
+    for (const auto& [k, v] : r.extra) s += fmt::format(", {} {:.4g}", k, v);
+    s += "\n";
   }
   return s;
 }

@@ -3,6 +3,7 @@
 // trace the same ray sets with each (Embree always included, in the same
 // process), median of repeats, ratios to Embree from this run.
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,7 @@ struct BenchRecord {
   double sah_cost = 0;
   size_t nodes = 0, leaves = 0;
   int max_depth = 0;
+  std::map<std::string, double> extra;  // BuildStats::extra (structure-specific figures)
 
   nlohmann::json to_json() const;
 };
@@ -48,5 +50,9 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
 
 // Fixed-width table for the terminal.
 std::string format_bench_table(const std::vector<BenchRecord>& records);
+
+// One line per accelerator: SAH cost, nodes, leaves, depth, bytes per
+// triangle and its structure-specific build figures.
+std::string format_build_summary(const std::vector<BenchRecord>& records);
 
 }  // namespace raylab

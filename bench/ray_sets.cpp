@@ -58,11 +58,20 @@ RaySet make_random_rays(const Scene& scene, size_t count, uint64_t seed) {
   return set;
 }
 
-float secondary_ray_offset(const Scene& scene, const Vec3f& p) {
+namespace {
+
+// The offset for a scene whose bounds' diagonal is known (computing the
+// bounds walks every vertex: once per ray set, not once per ray).
+float offset_for(float diag, const Vec3f& p) { return 2e-5f * p.cwiseAbs().maxCoeff() + 1e-6f * diag; }
+
+float bounds_diagonal(const Scene& scene) {
   const Aabb b = scene.bounds();
-  const float diag = b.is_empty() ? 0.0f : b.diagonal().norm();
-  return 2e-5f * p.cwiseAbs().maxCoeff() + 1e-6f * diag;
+  return b.is_empty() ? 0.0f : b.diagonal().norm();
 }
+
+}  // namespace
+
+float secondary_ray_offset(const Scene& scene, const Vec3f& p) { return offset_for(bounds_diagonal(scene), p); }
 
 namespace {
 
@@ -86,12 +95,13 @@ bool surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Vec3f& p, Ve
 RaySet make_diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const Hit> hits, uint64_t seed) {
   RaySet set{"diffuse", false, {}};
   Pcg32 rng(mix64(seed), 0xD1FF);
+  const float diag = bounds_diagonal(scene);
   for (size_t i = 0; i < primary.rays.size(); ++i) {
     Vec3f p, n;
     if (!surface_at(scene, primary.rays[i], hits[i], p, n)) continue;
     float pdf;
     const Vec3f d = sample_cosine_hemisphere(n, rng.uniform(), rng.uniform(), pdf);
-    set.rays.emplace_back(p + secondary_ray_offset(scene, p) * n, d);
+    set.rays.emplace_back(p + offset_for(diag, p) * n, d);
   }
   return set;
 }
@@ -101,12 +111,13 @@ RaySet make_shadow_rays(const Scene& scene, const RaySet& primary, std::span<con
   Pcg32 rng(mix64(seed), 0x5AD0);
   const LightSampler lights(scene);
   const Aabb b = scene.bounds();
+  const float diag = bounds_diagonal(scene);
   const Vec3f point_light =
       b.is_empty() ? Vec3f(0, 10, 0) : Vec3f(b.center() + b.diagonal().norm() * Vec3f(0.3f, 1.0f, 0.2f));
   for (size_t i = 0; i < primary.rays.size(); ++i) {
     Vec3f p, n;
     if (!surface_at(scene, primary.rays[i], hits[i], p, n)) continue;
-    const Vec3f origin = p + secondary_ray_offset(scene, p) * n;
+    const Vec3f origin = p + offset_for(diag, p) * n;
     Vec3f target = point_light;
     if (!lights.empty()) target = lights.sample(rng.uniform(), rng.uniform(), rng.uniform()).point;
     const Vec3f d = target - origin;

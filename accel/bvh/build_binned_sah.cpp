@@ -1,266 +1,294 @@
 #include "accel/bvh/build_binned_sah.h"
 
+#include "accel/bvh/sah_binning.h"
+
+
 #include <algorithm>
 #include <atomic>
-#include <numeric>
+#include <cstdlib>
+#include <limits>
+#include <memory>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/blocked_range.h>
 
 namespace raylab {
 
 namespace {
 
-constexpr int kMaxBins = 256;
-// Beyond this depth splits fall back to the object median, so the depth (and
-// the traversal stack) stays bounded even for pathological inputs.
-constexpr int kForceMedianDepth = 96;
-constexpr size_t kParallelTaskSize = 4096;
-constexpr size_t kParallelBinSize = 65536;
+using sah::BinSet;
+using sah::Binning;
+using sah::Split;
+using sah::bin_refs;
+using sah::find_binned_split;
 
-struct Bin {
-  Aabb box;
-  uint32_t count = 0;
-};
+constexpr size_t kParallelTaskSize = 4096;     // subtrees at least this large become tasks
+constexpr size_t kParallelPartitionSize = 32768;
+// Nodes with at most this many references evaluate every object split exactly
+// (sorted centroids) instead of binning: cheaper for small nodes, and exact.
+constexpr size_t kSmallSweep = 16;
+// Bins used for small ranges (measured: same SAH cost, ~10% less build time).
+int bins_for(size_t n, int bins) { return std::min(bins, n < 128 ? 8 : n < 1024 ? 16 : bins); }
 
-struct BinSet {
-  Bin bins[3][kMaxBins];
-};
-
-class Builder {
+class BinnedBuilder {
  public:
-  Builder(std::span<const Aabb> boxes, std::span<const Vec3f> centroids, const BinnedSahOptions& o)
-      : boxes_(boxes), centroids_(centroids), opt_(o) {
-    opt_.bins = std::clamp(opt_.bins, 2, kMaxBins);
+  BinnedBuilder(std::vector<BuildRef>&& refs, const BuildOptions& o) : refs_(std::move(refs)), opt_(o) {
+    opt_.bins = std::clamp(opt_.bins, 2, sah::kMaxBins);
     opt_.max_leaf = std::max(1, opt_.max_leaf);
   }
 
   BinaryBvh run() {
-    const size_t n = boxes_.size();
-    bvh_.prim_ids.resize(n);
-    std::iota(bvh_.prim_ids.begin(), bvh_.prim_ids.end(), 0u);
-    bvh_.nodes.resize(std::max<size_t>(1, 2 * n));
-    next_node_ = 1;
+    const size_t n = refs_.size();
+    out_.prim_ids.resize(n);
     if (n == 0) {
-      // Empty scene: a single empty leaf whose box no ray can hit.
-      Bvh2Node& root = bvh_.nodes[0];
-      root.set_bounds(Aabb::empty());
-      root.index = 0;
-      root.count = 0;
-      bvh_.nodes.resize(1);
-      return std::move(bvh_);
+      out_.nodes.resize(1);
+      set_leaf(out_.nodes[0], Aabb::empty(), 0, 0);
+      return std::move(out_);
     }
-    Aabb bounds, cbounds;
-    compute_bounds(0, n, bounds, cbounds);
-    build(0, 0, n, bounds, cbounds, 0);
-    bvh_.nodes.resize(next_node_.load());
-    return std::move(bvh_);
+    out_.nodes.resize(2 * n);
+    scratch_.resize(n);
+    Box4 bounds, cbounds;
+    compute_bounds(refs_.data(), 0, n, bounds, cbounds);
+    build(0, 0, n, bounds, cbounds, opt_.start_depth, refs_.data(), scratch_.data());
+    out_.nodes.resize(next_node_.load());
+    return std::move(out_);
   }
 
  private:
-  void compute_bounds(size_t begin, size_t end, Aabb& bounds, Aabb& cbounds) const {
-    using Pair = std::pair<Aabb, Aabb>;
+  static void compute_bounds(const BuildRef* refs, size_t b, size_t e, Box4& bounds, Box4& cbounds) {
+    using Pair = std::pair<Box4, Box4>;
     auto body = [&](const tbb::blocked_range<size_t>& r, Pair acc) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint32_t id = bvh_.prim_ids[i];
-        acc.first.extend(boxes_[id]);
-        acc.second.extend(centroids_[id]);
+        acc.first.extend(refs[i].box);
+        acc.second.extend(refs[i].centroid());
       }
       return acc;
     };
-    Pair result;
-    if (end - begin >= kParallelBinSize) {
-      result = tbb::parallel_reduce(
-          tbb::blocked_range<size_t>(begin, end, 8192), Pair{}, body,
-          [](Pair a, const Pair& b) { return Pair{merge(a.first, b.first), merge(a.second, b.second)}; });
-    } else {
-      result = body(tbb::blocked_range<size_t>(begin, end), Pair{});
+    Pair res = (e - b >= sah::kParallelBinSize)
+                   ? tbb::parallel_reduce(tbb::blocked_range<size_t>(b, e, 8192), Pair{}, body,
+                                          [](Pair x, const Pair& y) {
+                                            return Pair{merge(x.first, y.first), merge(x.second, y.second)};
+                                          })
+                   : body(tbb::blocked_range<size_t>(b, e), Pair{});
+    bounds = res.first;
+    cbounds = res.second;
+  }
+
+  // In-place partition of refs[b, e) by the split; accumulates the sides'
+  // centroid bounds. Returns the first index of the right side.
+  size_t partition_inplace(BuildRef* refs, size_t b, size_t e, const Binning& bn, const Split& s, Box4& lc,
+                           Box4& rc) const {
+    size_t i = b, j = e;
+    while (true) {
+      while (i < j && bn.bin_of(refs[i], s.axis) < s.pos) lc.extend(refs[i++].centroid());
+      while (i < j && bn.bin_of(refs[j - 1], s.axis) >= s.pos) rc.extend(refs[--j].centroid());
+      if (i >= j) return i;
+      std::swap(refs[i], refs[j - 1]);
     }
-    bounds = result.first;
-    cbounds = result.second;
   }
 
-  int bin_of(float c, float lo, float scale) const {
-    const int b = static_cast<int>((c - lo) * scale);
-    return std::clamp(b, 0, opt_.bins - 1);
-  }
-
-  void fill_bins(size_t begin, size_t end, const Aabb& cb, const Vec3f& scale, BinSet& out) const {
-    auto body = [&](const tbb::blocked_range<size_t>& r, BinSet* acc) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint32_t id = bvh_.prim_ids[i];
-        for (int a = 0; a < 3; ++a) {
-          if (scale[a] <= 0.0f) continue;
-          Bin& bin = acc->bins[a][bin_of(centroids_[id][a], cb.lo[a], scale[a])];
-          bin.box.extend(boxes_[id]);
-          bin.count++;
-        }
-      }
-    };
-    if (end - begin < kParallelBinSize) {
-      body(tbb::blocked_range<size_t>(begin, end), &out);
-      return;
+  // Parallel stable partition of src[b, e) into dst[b, e).
+  size_t partition_parallel(const BuildRef* src, BuildRef* dst, size_t b, size_t e, const Binning& bn,
+                            const Split& s, Box4& lc, Box4& rc) const {
+    const size_t n = e - b;
+    const size_t chunks = std::min<size_t>(256, (n + 8191) / 8192);
+    const size_t chunk = (n + chunks - 1) / chunks;
+    std::vector<size_t> left(chunks), loff(chunks), roff(chunks);
+    std::vector<Box4> lcs(chunks), rcs(chunks);
+    tbb::parallel_for(size_t{0}, chunks, [&](size_t c) {
+      const size_t cb = b + c * chunk, ce = std::min(e, cb + chunk);
+      size_t cnt = 0;
+      for (size_t i = cb; i < ce; ++i) cnt += bn.bin_of(src[i], s.axis) < s.pos;
+      left[c] = cnt;
+    });
+    size_t total_left = 0;
+    for (size_t c = 0; c < chunks; ++c) {
+      loff[c] = total_left;
+      total_left += left[c];
     }
-    struct Reducer {
-      const decltype(body)& f;
-      std::unique_ptr<BinSet> set = std::make_unique<BinSet>();
-      Reducer(const decltype(body)& fn) : f(fn) {}
-      Reducer(Reducer& o, tbb::split) : f(o.f) {}
-      void operator()(const tbb::blocked_range<size_t>& r) { f(r, set.get()); }
-      void join(const Reducer& o) {
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < kMaxBins; ++b) {
-            set->bins[a][b].box.extend(o.set->bins[a][b].box);
-            set->bins[a][b].count += o.set->bins[a][b].count;
-          }
-      }
-    } reducer(body);
-    tbb::parallel_reduce(tbb::blocked_range<size_t>(begin, end, 16384), reducer);
-    out = *reducer.set;
-  }
-
-  void make_leaf(uint32_t node, size_t begin, size_t end, const Aabb& bounds) {
-    Bvh2Node& nd = bvh_.nodes[node];
-    nd.set_bounds(bounds);
-    nd.index = static_cast<uint32_t>(begin);
-    nd.count = static_cast<uint32_t>(end - begin);
-  }
-
-  void build(uint32_t node, size_t begin, size_t end, const Aabb& bounds, const Aabb& cbounds, int depth) {
-    const size_t n = end - begin;
-    if (n == 1) return make_leaf(node, begin, end, bounds);
-
-    size_t mid = begin;
-    bool split_found = false;
-    const Vec3f ext = cbounds.diagonal();
-    const bool degenerate_centroids = ext.maxCoeff() <= 0.0f;
-
-    if (!degenerate_centroids && depth < kForceMedianDepth) {
-      Vec3f scale;
-      for (int a = 0; a < 3; ++a)
-        scale[a] = ext[a] > 0.0f ? static_cast<float>(opt_.bins) * (1.0f - 1e-6f) / ext[a] : 0.0f;
-      auto bins = std::make_unique<BinSet>();
-      fill_bins(begin, end, cbounds, scale, *bins);
-
-      float best_cost = std::numeric_limits<float>::infinity();
-      int best_axis = -1, best_split = -1;
-      float right_area[kMaxBins];
-      for (int a = 0; a < 3; ++a) {
-        if (scale[a] <= 0.0f) continue;
-        const Bin* row = bins->bins[a];
-        Aabb acc;
-        for (int b = opt_.bins - 1; b > 0; --b) {
-          acc.extend(row[b].box);
-          right_area[b] = acc.half_area();
-        }
-        Aabb left;
-        uint32_t left_count = 0;
-        for (int b = 1; b < opt_.bins; ++b) {
-          left.extend(row[b - 1].box);
-          left_count += row[b - 1].count;
-          const uint32_t right_count = static_cast<uint32_t>(n) - left_count;
-          if (left_count == 0 || right_count == 0) continue;
-          const float cost = left.half_area() * left_count + right_area[b] * right_count;
-          if (cost < best_cost) {
-            best_cost = cost;
-            best_axis = a;
-            best_split = b;
-          }
+    size_t rsum = 0;
+    for (size_t c = 0; c < chunks; ++c) {
+      const size_t cb = b + c * chunk, ce = std::min(e, cb + chunk);
+      roff[c] = total_left + rsum;
+      rsum += (ce > cb ? ce - cb : 0) - left[c];
+    }
+    tbb::parallel_for(size_t{0}, chunks, [&](size_t c) {
+      const size_t cb = b + c * chunk, ce = std::min(e, cb + chunk);
+      size_t l = b + loff[c], r = b + roff[c];
+      Box4 lcb, rcb;
+      for (size_t i = cb; i < ce; ++i) {
+        if (bn.bin_of(src[i], s.axis) < s.pos) {
+          lcb.extend(src[i].centroid());
+          dst[l++] = src[i];
+        } else {
+          rcb.extend(src[i].centroid());
+          dst[r++] = src[i];
         }
       }
-      const float parent_area = bounds.half_area();
-      const float split_cost = opt_.traversal_cost +
-                               opt_.intersection_cost * (parent_area > 0.0f ? best_cost / parent_area : 0.0f);
+      lcs[c] = lcb;
+      rcs[c] = rcb;
+    });
+    for (size_t c = 0; c < chunks; ++c) {
+      lc.extend(lcs[c]);
+      rc.extend(rcs[c]);
+    }
+    return b + total_left;
+  }
+
+  // Exact SAH over the n-1 object splits of each axis for small nodes;
+  // reorders refs[b, e) along the best axis and returns the split.
+  Split small_sweep(BuildRef* refs, size_t b, size_t e, size_t& mid, Box4& lcb, Box4& rcb) const {
+    const int n = static_cast<int>(e - b);
+    alignas(16) float c[kSmallSweep][4];
+    for (int i = 0; i < n; ++i) _mm_store_ps(c[i], refs[b + i].centroid());
+    uint8_t order[3][kSmallSweep];
+    Split best;
+    float right_area[kSmallSweep];
+    for (int a = 0; a < 3; ++a) {
+      uint8_t* o = order[a];
+      for (int i = 0; i < n; ++i) {
+        int j = i;
+        for (; j > 0 && c[o[j - 1]][a] > c[i][a]; --j) o[j] = o[j - 1];
+        o[j] = static_cast<uint8_t>(i);
+      }
+      Box4 acc;
+      for (int i = n - 1; i > 0; --i) {
+        acc.extend(refs[b + o[i]].box);
+        right_area[i] = acc.half_area();
+      }
+      Box4 left;
+      for (int i = 1; i < n; ++i) {
+        left.extend(refs[b + o[i - 1]].box);
+        const float cost = left.half_area() * static_cast<float>(i) + right_area[i] * static_cast<float>(n - i);
+        if (cost < best.cost || (cost == best.cost && std::abs(2 * i - n) < std::abs(2 * best.pos - n))) {
+          best.cost = cost;
+          best.axis = a;
+          best.pos = i;
+          best.left = left;
+          best.left_count = static_cast<uint32_t>(i);
+        }
+      }
+    }
+    BuildRef tmp[kSmallSweep];
+    for (int i = 0; i < n; ++i) tmp[i] = refs[b + i];
+    const uint8_t* o = order[best.axis];
+    best.right = Box4();
+    for (int i = 0; i < n; ++i) {
+      refs[b + i] = tmp[o[i]];
+      if (i < best.pos) lcb.extend(refs[b + i].centroid());
+      else {
+        rcb.extend(refs[b + i].centroid());
+        best.right.extend(refs[b + i].box);
+      }
+    }
+    mid = b + static_cast<size_t>(best.pos);
+    return best;
+  }
+
+  void make_leaf(uint32_t node, const BuildRef* refs, size_t b, size_t e, const Box4& bounds) {
+    for (size_t i = b; i < e; ++i) out_.prim_ids[i] = refs[i].prim();
+    set_leaf(out_.nodes[node], bounds.aabb(), static_cast<uint32_t>(b), static_cast<uint32_t>(e - b));
+  }
+
+  void build(uint32_t node, size_t b, size_t e, const Box4& bounds, const Box4& cbounds, int depth, BuildRef* cur,
+             BuildRef* other) {
+    const size_t n = e - b;
+    if (n <= static_cast<size_t>(std::max(1, opt_.leaf_threshold))) return make_leaf(node, cur, b, e, bounds);
+
+    alignas(16) float cext[4];
+    _mm_store_ps(cext, _mm_sub_ps(cbounds.hi, cbounds.lo));
+    const bool flat = !(cext[0] > 0.0f || cext[1] > 0.0f || cext[2] > 0.0f);
+
+    size_t mid = b;
+    Box4 lb, rb, lcb, rcb;
+    BuildRef* child_buf = cur;
+    BuildRef* child_other = other;
+    bool done = false;
+    if (n <= kSmallSweep && depth < kForceMedianDepth) {
+      const Split s = small_sweep(cur, b, e, mid, lcb, rcb);
+      const float area = bounds.half_area();
+      const float split_cost = opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);
+      if (n <= static_cast<size_t>(opt_.max_leaf) && opt_.intersection_cost * static_cast<float>(n) <= split_cost)
+        return make_leaf(node, cur, b, e, bounds);
+      lb = s.left;
+      rb = s.right;
+      done = true;
+    } else if (!flat && depth < kForceMedianDepth) {
+      // Fewer bins for small ranges: with few references most of 32 bins are
+      // empty, and sweeping them costs more than binning.
+      const int nb = bins_for(n, opt_.bins);
+      const Binning bn(cbounds, nb);
+      const auto bins = bin_refs(cur, b, e, bn, nb);
+      const Split s = find_binned_split(*bins, bn, nb);
+      const float area = bounds.half_area();
+      const float split_cost =
+          opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);
       const float leaf_cost = opt_.intersection_cost * static_cast<float>(n);
-      if (n <= static_cast<size_t>(opt_.max_leaf) && (best_axis < 0 || leaf_cost <= split_cost))
-        return make_leaf(node, begin, end, bounds);
-      if (best_axis >= 0) {
-        const float lo = cbounds.lo[best_axis], sc = scale[best_axis];
-        auto* first = bvh_.prim_ids.data() + begin;
-        auto* last = bvh_.prim_ids.data() + end;
-        auto* pivot = std::partition(first, last, [&](uint32_t id) {
-          return bin_of(centroids_[id][best_axis], lo, sc) < best_split;
-        });
-        mid = begin + static_cast<size_t>(pivot - first);
-        split_found = mid > begin && mid < end;
+      if (n <= static_cast<size_t>(opt_.max_leaf) && (s.axis < 0 || leaf_cost <= split_cost))
+        return make_leaf(node, cur, b, e, bounds);
+      if (s.axis >= 0) {
+        if (n >= kParallelPartitionSize) {
+          mid = partition_parallel(cur, other, b, e, bn, s, lcb, rcb);
+          std::swap(child_buf, child_other);
+        } else {
+          mid = partition_inplace(cur, b, e, bn, s, lcb, rcb);
+        }
+        lb = s.left;
+        rb = s.right;
+        done = mid > b && mid < e;
       }
     } else if (n <= static_cast<size_t>(opt_.max_leaf)) {
-      return make_leaf(node, begin, end, bounds);
+      return make_leaf(node, cur, b, e, bounds);
     }
-
-    if (!split_found) {
-      // Identical centroids (or forced): split the range in the middle by
-      // the largest axis so leaves stay small and the depth logarithmic.
-      mid = begin + n / 2;
-      const int axis = cbounds.largest_axis();
-      auto* first = bvh_.prim_ids.data() + begin;
-      std::nth_element(first, first + n / 2, bvh_.prim_ids.data() + end,
-                       [&](uint32_t x, uint32_t y) { return centroids_[x][axis] < centroids_[y][axis]; });
+    if (!done) {
+      // Identical centroids (or too deep): split the range at the object
+      // median of the widest axis so leaves stay small and depth logarithmic.
+      mid = b + n / 2;
+      int axis = 0;
+      if (cext[1] > cext[axis]) axis = 1;
+      if (cext[2] > cext[axis]) axis = 2;
+      BuildRef* data = child_buf;  // where the references are now
+      std::nth_element(data + b, data + mid, data + e, [axis](const BuildRef& x, const BuildRef& y) {
+        alignas(16) float cx[4], cy[4];
+        _mm_store_ps(cx, x.centroid());
+        _mm_store_ps(cy, y.centroid());
+        return cx[axis] < cy[axis];
+      });
+      compute_bounds(data, b, mid, lb, lcb);
+      compute_bounds(data, mid, e, rb, rcb);
     }
 
     const uint32_t left = next_node_.fetch_add(2);
-    Bvh2Node& nd = bvh_.nodes[node];
-    nd.set_bounds(bounds);
+    Bvh2Node& nd = out_.nodes[node];
+    nd.set_bounds(bounds.aabb());
     nd.index = left;
     nd.count = 0;
-
-    Aabb lb, lcb, rb, rcb;
-    compute_bounds(begin, mid, lb, lcb);
-    compute_bounds(mid, end, rb, rcb);
     if (n >= kParallelTaskSize) {
-      tbb::parallel_invoke([&] { build(left, begin, mid, lb, lcb, depth + 1); },
-                           [&] { build(left + 1, mid, end, rb, rcb, depth + 1); });
+      tbb::parallel_invoke([&] { build(left, b, mid, lb, lcb, depth + 1, child_buf, child_other); },
+                           [&] { build(left + 1, mid, e, rb, rcb, depth + 1, child_buf, child_other); });
     } else {
-      build(left, begin, mid, lb, lcb, depth + 1);
-      build(left + 1, mid, end, rb, rcb, depth + 1);
+      build(left, b, mid, lb, lcb, depth + 1, child_buf, child_other);
+      build(left + 1, mid, e, rb, rcb, depth + 1, child_buf, child_other);
     }
   }
 
-  std::span<const Aabb> boxes_;
-  std::span<const Vec3f> centroids_;
-  BinnedSahOptions opt_;
-  BinaryBvh bvh_;
+  std::vector<BuildRef> refs_, scratch_;
+  BuildOptions opt_;
+  BinaryBvh out_;
   std::atomic<uint32_t> next_node_{1};
 };
 
 }  // namespace
 
-BinaryBvh build_binned_sah(std::span<const Aabb> boxes, std::span<const Vec3f> centroids,
-                           const BinnedSahOptions& options) {
-  return Builder(boxes, centroids, options).run();
+BinaryBvh build_binned_sah(std::vector<BuildRef> refs, const BuildOptions& options) {
+  return BinnedBuilder(std::move(refs), options).run();
 }
 
-TreeShape measure_tree(std::span<const Bvh2Node> nodes) {
-  TreeShape s;
-  if (nodes.empty()) return s;
-  const double root_area = nodes[0].bounds().half_area();
-  struct Item {
-    uint32_t node;
-    int depth;
-  };
-  std::vector<Item> stack{{0, 0}};
-  double depth_sum = 0.0, cost = 0.0;
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    const Bvh2Node& n = nodes[it.node];
-    s.nodes++;
-    s.max_depth = std::max(s.max_depth, it.depth);
-    const double area = n.bounds().half_area();
-    if (n.is_leaf() || n.index == 0) {
-      s.leaves++;
-      depth_sum += it.depth;
-      cost += kSahIntersectionCost * area * n.count;
-    } else {
-      cost += kSahTraversalCost * area;
-      stack.push_back({n.index, it.depth + 1});
-      stack.push_back({n.index + 1, it.depth + 1});
-    }
-  }
-  s.avg_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
-  s.sah_cost = root_area > 0.0 ? cost / root_area : 0.0;
-  return s;
+BinaryBvh build_binned_sah(std::span<const Aabb> boxes, std::span<const Vec3f> centroids,
+                           const BuildOptions& options) {
+  return build_binned_sah(make_build_refs(boxes, centroids), options);
 }
 
 }  // namespace raylab

@@ -50,4 +50,8 @@ struct TreeShape {
 // Walks the tree once: node/leaf counts, depths and SAH cost.
 TreeShape measure_tree(std::span<const Bvh2Node> nodes);
 
+// SAH cost only (same constants), as a parallel sum over the node array:
+// every node in the array is part of the tree.
+double tree_sah_cost(std::span<const Bvh2Node> nodes);
+
 }  // namespace raylab

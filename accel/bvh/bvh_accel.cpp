@@ -1,56 +1,73 @@
+// `bvh`: the BVH family. A spec picks a builder for the canonical binary tree,
+// an optional optimisation pass, and a traversal layout the tree is converted
+// into:
+//
+//   builder=binned|sweep|sbvh|lbvh   opt=none|reinsert   layout=bvh2|bvh4|bvh8
+//
+// Every combination reports the same statistics: build ms, bytes, nodes,
+// leaves, depth and SAH cost of the traced structure (constants in
+// bvh2_node.h), plus structure-specific figures in BuildStats::extra.
 #include "accel/bvh/bvh_accel.h"
 
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "accel/bvh/build_binned_sah.h"
-#include "accel/bvh/traverse_bvh2.h"
+#include "accel/bvh/build_lbvh.h"
+#include "accel/bvh/build_sbvh.h"
+#include "accel/bvh/build_sweep_sah.h"
+#include "accel/bvh/optimize_reinsertion.h"
+#include "accel/bvh/bvh2_layout.h"
+#include "accel/bvh/collapse_wide.h"
+#include "accel/bvh/traverse_wide.h"
 #include "accel/util/timer.h"
 
 namespace raylab {
 
 namespace {
 
-class BvhAccel final : public Accelerator {
+enum class BuilderKind { Binned, Sweep, Sbvh, Lbvh };
+enum class LayoutKind { Bvh2, Bvh4, Bvh8 };
+
+struct BvhConfig {
+  BuilderKind builder = BuilderKind::Binned;
+  LayoutKind layout = LayoutKind::Bvh8;
+  bool reinsert = false;
+  int leaf = 0;           // max references per leaf (0 = layout default)
+  int block = 0;          // triangles per SIMD block (0 = layout default)
+  int bins = 32;
+  int binary_leaf = 1;        // ranges this small become binary leaves without SAH test
+  float alpha = 1e-5f;        // SBVH overlap threshold
+  float split_budget = 0.5f;  // SBVH extra references / triangles
+  int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
+  int spatial_bins = 32;      // SBVH: slabs per axis
+  double opt_ms = 500.0;      // reinsertion time budget
+  float node_cost = 1.0f;   // collapse: cost of a node visit
+  float block_cost = 1.0f;  // collapse: cost of one block test
+  TriangleTest tri = TriangleTest::Watertight;
+};
+
+int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
+
+// The traversal structure behind the accelerator: one virtual call per batch.
+class Kernel {
  public:
-  BvhAccel(const BinnedSahOptions& opt, TriangleTest test) : opt_(opt), test_(test) {}
+  virtual ~Kernel() = default;
+  virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const = 0;
+  virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const = 0;
+};
 
-  BuildStats build(const TriangleMesh& mesh) override {
-    mesh.validate();
-    Timer timer;
-    const size_t n = mesh.num_triangles();
-    std::vector<Aabb> boxes(n);
-    std::vector<Vec3f> centroids(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        boxes[i] = mesh.triangle_bounds(i);
-        centroids[i] = boxes[i].center();
-      }
-    });
-    BinaryBvh tree = build_binned_sah(boxes, centroids, opt_);
-    nodes_ = std::move(tree.nodes);
-    tris_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const uint32_t id = tree.prim_ids[i];
-        tris_[i] = LeafTriangle{mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2), id};
-      }
-    });
-    view_ = Bvh2View{nodes_.data(), tris_.data(), n == 0};
-
-    BuildStats s;
-    s.build_ms = timer.ms();
-    const TreeShape shape = measure_tree(nodes_);
-    s.nodes = shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
-    s.sah_cost = shape.sah_cost;
-    s.bytes = nodes_.size() * sizeof(Bvh2Node) + tris_.size() * sizeof(LeafTriangle);
-    return s;
-  }
+class Bvh2Kernel final : public Kernel {
+ public:
+  Bvh2Kernel(Bvh2Layout layout, TriangleTest tri) : layout_(std::move(layout)), view_(layout_.view()), tri_(tri) {}
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    dispatch_triangle_test(test_, [&]<TriangleTest kTest>() {
+    dispatch_triangle_test(tri_, [&]<TriangleTest kTest>() {
       if (stats) {
         for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_bvh2<kTest, false, true>(view_, rays[i], stats);
       } else {
@@ -58,12 +75,10 @@ class BvhAccel final : public Accelerator {
       }
     });
   }
-
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    dispatch_triangle_test(test_, [&]<TriangleTest kTest>() {
+    dispatch_triangle_test(tri_, [&]<TriangleTest kTest>() {
       if (stats) {
-        for (size_t i = 0; i < rays.size(); ++i)
-          occ[i] = traverse_bvh2<kTest, true, true>(view_, rays[i], stats).valid();
+        for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_bvh2<kTest, true, true>(view_, rays[i], stats).valid();
       } else {
         for (size_t i = 0; i < rays.size(); ++i)
           occ[i] = traverse_bvh2<kTest, true, false>(view_, rays[i], nullptr).valid();
@@ -72,30 +87,251 @@ class BvhAccel final : public Accelerator {
   }
 
  private:
-  BinnedSahOptions opt_;
-  TriangleTest test_;
-  std::vector<Bvh2Node> nodes_;
-  std::vector<LeafTriangle> tris_;
+  Bvh2Layout layout_;
   Bvh2View view_;
+  TriangleTest tri_;
+};
+
+template <int N, int W>
+class WideKernel final : public Kernel {
+ public:
+  explicit WideKernel(WideBvh<N, W> bvh) : bvh_(std::move(bvh)) {
+    view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref};
+  }
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    if (stats) {
+      for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide<N, W, false, true>(view_, rays[i], stats);
+    } else {
+      for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide<N, W, false, false>(view_, rays[i], nullptr);
+    }
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    if (stats) {
+      for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_wide<N, W, true, true>(view_, rays[i], stats).valid();
+    } else {
+      for (size_t i = 0; i < rays.size(); ++i)
+        occ[i] = traverse_wide<N, W, true, false>(view_, rays[i], nullptr).valid();
+    }
+  }
+  size_t bytes() const { return bvh_.bytes(); }
+
+ private:
+  WideBvh<N, W> bvh_;
+  WideView<N, W> view_;
+};
+
+template <int N, int W>
+std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, size_t& bytes) {
+  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh));
+  bytes = k->bytes();
+  return k;
+}
+
+class BvhAccel final : public Accelerator {
+ public:
+  explicit BvhAccel(const BvhConfig& c) : cfg_(c) {
+    if (!simd::isa_supported_by_cpu())
+      throw std::runtime_error(fmt::format("bvh: this binary was built for {} but the CPU does not support it "
+                                           "(rebuild with -DRAYLAB_NATIVE=ON on this machine)",
+                                           simd::isa_name()));
+  }
+
+  BuildStats build(const TriangleMesh& mesh) override {
+    mesh.validate();
+    Timer timer;
+    BuildStats s;
+    const size_t n = mesh.num_triangles();
+    // Triangle boxes and centroids (box centres); the binned builder takes
+    // its references directly, the other builders the two arrays.
+    std::vector<Aabb> boxes;
+    std::vector<Vec3f> centroids;
+    std::vector<BuildRef> refs;
+    if (cfg_.builder == BuilderKind::Binned) {
+      refs.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const Aabb b = mesh.triangle_bounds(i);
+          refs[i] = BuildRef::make(b, b.center(), static_cast<uint32_t>(i));
+        }
+      });
+    } else {
+      boxes.resize(n);
+      centroids.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          boxes[i] = mesh.triangle_bounds(i);
+          centroids[i] = boxes[i].center();
+        }
+      });
+    }
+
+    const int width = layout_width(cfg_.layout);
+    const int block = cfg_.layout == LayoutKind::Bvh2 ? 1 : cfg_.block;
+    const int leaf = cfg_.leaf;
+
+    BuildOptions bo;
+    bo.bins = cfg_.bins;
+    bo.max_leaf = 1;  // leaves are formed by the SAH-optimal collapse
+    bo.leaf_threshold = std::min(cfg_.binary_leaf, leaf);
+    s.extra["ms_prepare"] = timer.ms();
+    Timer phase;
+    BinaryBvh tree;
+    switch (cfg_.builder) {
+      case BuilderKind::Binned: tree = build_binned_sah(std::move(refs), bo); break;
+      case BuilderKind::Sweep: tree = build_sweep_sah(boxes, centroids, bo); break;
+      case BuilderKind::Lbvh: tree = build_lbvh(boxes, centroids); break;
+      case BuilderKind::Sbvh: {
+        SbvhOptions so;
+        so.base = bo;
+        so.alpha = cfg_.alpha;
+        so.split_budget = cfg_.split_budget;
+        so.min_spatial_refs = static_cast<size_t>(cfg_.spatial_min);
+        so.spatial_bins = cfg_.spatial_bins;
+        SbvhStats ss;
+        tree = build_sbvh(boxes, centroids, TriangleSplitter(mesh), so, &ss);
+        s.extra["spatial_splits"] = static_cast<double>(ss.spatial_splits);
+        break;
+      }
+    }
+    s.extra["ms_tree"] = phase.ms();
+    s.extra["refs_per_triangle"] = n ? static_cast<double>(tree.prim_ids.size()) / n : 0.0;
+    if (cfg_.reinsert) {
+      ReinsertionOptions ro;
+      ro.time_budget_ms = cfg_.opt_ms;
+      ReinsertionStats rs;
+      tree = optimize_reinsertion(tree, ro, &rs);
+      s.extra["sah_before_opt"] = rs.sah_before;
+      s.extra["sah_after_opt"] = rs.sah_after;
+      s.extra["opt_ms"] = rs.ms;
+      s.extra["opt_rounds"] = rs.rounds;
+      s.extra["opt_moves"] = static_cast<double>(rs.moves);
+    }
+    phase.reset();
+    // Builders bound the depth (median splits beyond kForceMedianDepth, LBVH
+    // by its key length, reinsertion by rejecting deeper results); the wide
+    // layouts check their depth against the stack below.
+    s.extra["sah_tree"] = tree_sah_cost(tree.nodes);
+    s.extra["ms_measure"] = phase.ms();
+
+    phase.reset();
+    CollapseOptions co;
+    co.width = width;
+    co.block_width = block;
+    co.max_leaf = leaf;
+    co.max_leaf_blocks = width == 2 ? 1 << 20 : static_cast<int>(wide_ref::kMaxBlocks);
+    co.node_cost = cfg_.node_cost;
+    co.block_cost = cfg_.block_cost;
+    const WideTree wide = collapse_to_wide(tree, co);
+    const WideShape shape = measure_wide(wide);
+    s.extra["ms_collapse"] = phase.ms();
+    s.extra["avg_leaf_size"] = shape.avg_leaf_size;
+    s.extra["child_fill"] = shape.child_fill;
+
+    phase.reset();
+    size_t bytes = 0;
+    if (cfg_.layout == LayoutKind::Bvh2) {
+      Bvh2Layout l = make_bvh2_layout(wide, mesh);
+      bytes = l.bytes();
+      kernel_ = std::make_unique<Bvh2Kernel>(std::move(l), cfg_.tri);
+    } else {
+      if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
+        throw std::runtime_error("bvh: tree too deep for the traversal stack");
+      if (cfg_.layout == LayoutKind::Bvh4) {
+        if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, bytes);
+        else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, bytes);
+        else kernel_ = make_wide_kernel<4, 16>(wide, mesh, bytes);
+      } else {
+        if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, bytes);
+        else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, bytes);
+        else kernel_ = make_wide_kernel<8, 16>(wide, mesh, bytes);
+      }
+      s.extra["simd_bits"] = simd::isa_bits();
+      s.extra["block_width"] = block;
+    }
+    s.extra["ms_layout"] = phase.ms();
+    s.build_ms = timer.ms();
+    s.bytes = bytes;
+    s.nodes = cfg_.layout == LayoutKind::Bvh2 ? 2 * shape.nodes + 1 : shape.nodes;
+    s.leaves = shape.leaves;
+    s.max_depth = shape.max_depth;
+    s.avg_depth = shape.avg_leaf_depth;
+    s.sah_cost = shape.sah_cost;
+    return s;
+  }
+
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    if (!kernel_) throw std::logic_error("bvh: intersect before build");
+    kernel_->intersect(rays, hits, stats);
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    if (!kernel_) throw std::logic_error("bvh: occluded before build");
+    kernel_->occluded(rays, occ, stats);
+  }
+
+ private:
+  BvhConfig cfg_;
+  std::unique_ptr<Kernel> kernel_;
 };
 
 }  // namespace
 
+std::string bvh_kernel_isa() { return simd::isa_name(); }
+
 AcceleratorInfo bvh_accelerator_info() {
   return AcceleratorInfo{
       "bvh",
-      "binary BVH, binned SAH build (TBB), ordered traversal, conservative slab test",
-      {{"leaf", "4", "maximum primitives per leaf"},
-       {"bins", "16", "SAH bins per axis (2..256)"},
-       {"tri", "watertight", "triangle test: watertight (Woop et al. 2013) or mt (Moller-Trumbore)"}},
+      fmt::format("BVH family: SAH builders, optional reinsertion, SAH-optimal wide collapse, SIMD kernels ({})",
+                  simd::isa_name()),
+      {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)"},
+       {"layout", "bvh8", "traversal layout: bvh2, bvh4 or bvh8"},
+       {"opt", "none", "post-build optimisation: none or reinsert"},
+       {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)"},
+       {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
+       {"bins", "32", "SAH bins per axis (2..256)"},
+       {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
+       {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
+       {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
+       {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
+       {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)"},
+       {"opt_ms", "500", "reinsert: time budget in ms"},
+       {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
+       {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
+       {"tri", "watertight", "triangle test: watertight (Woop et al. 2013); mt (Moller-Trumbore) with layout=bvh2 only"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
-        BinnedSahOptions opt;
-        opt.max_leaf = p.integer("leaf");
-        opt.bins = p.integer("bins");
-        if (opt.max_leaf < 1 || opt.max_leaf > 255) throw SpecError("bvh: leaf must be in 1..255");
-        if (opt.bins < 2 || opt.bins > 256) throw SpecError("bvh: bins must be in 2..256");
+        BvhConfig c;
+        const auto& b = p.choice("builder", {"binned", "sweep", "sbvh", "lbvh"});
+        c.builder = b == "sweep" ? BuilderKind::Sweep : b == "sbvh" ? BuilderKind::Sbvh : b == "lbvh" ? BuilderKind::Lbvh : BuilderKind::Binned;
+        const auto& l = p.choice("layout", {"bvh2", "bvh4", "bvh8"});
+        c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : LayoutKind::Bvh8;
+        c.reinsert = p.choice("opt", {"none", "reinsert"}) == "reinsert";
+        c.block = p.integer("block");
+        if (c.block != 4 && c.block != 8 && c.block != 16) throw SpecError("bvh: block must be 4, 8 or 16");
+        c.leaf = p.str("leaf") == "auto" ? (c.layout == LayoutKind::Bvh2 ? 4 : 2 * c.block) : p.integer("leaf");
+        const int max_leaf = c.layout == LayoutKind::Bvh2 ? 255 : static_cast<int>(wide_ref::kMaxBlocks) * c.block;
+        if (c.leaf < 1 || c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
+        c.bins = p.integer("bins");
+        c.binary_leaf = p.integer("bleaf");
+        if (c.binary_leaf < 1 || c.binary_leaf > 16) throw SpecError("bvh: bleaf must be in 1..16");
+        if (c.bins < 2 || c.bins > 256) throw SpecError("bvh: bins must be in 2..256");
+        c.alpha = static_cast<float>(p.real("alpha"));
+        c.split_budget = static_cast<float>(p.real("budget"));
+        c.opt_ms = p.real("opt_ms");
+        c.spatial_min = p.integer("smin");
+        c.spatial_bins = p.integer("sbins");
+        if (c.spatial_bins < 2 || c.spatial_bins > 256) throw SpecError("bvh: sbins must be in 2..256");
+        if (c.spatial_min < 0) throw SpecError("bvh: smin must be >= 0");
+        if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
+          throw SpecError("bvh: alpha must be >= 0 and budget in 0..4");
+        if (!(c.opt_ms >= 0.0 && c.opt_ms <= 1e6)) throw SpecError("bvh: opt_ms must be in 0..1e6");
+        c.node_cost = static_cast<float>(p.real("ct"));
+        c.block_cost = static_cast<float>(p.real("ci"));
+        if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
+          throw SpecError("bvh: ct and ci must be positive");
         const auto& t = p.choice("tri", {"watertight", "mt"});
-        return std::make_unique<BvhAccel>(opt, t == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight);
+        c.tri = t == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight;
+        if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
+          throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
+        return std::make_unique<BvhAccel>(c);
       }};
 }
 

@@ -5,6 +5,11 @@
 // it can be skipped when a closer hit has been found by the time it is popped.
 // Closest hit and any hit are the same routine (kAnyHit); counting is a
 // compile-time switch (kCount), so the uninstrumented kernel pays nothing.
+//
+// Boxes are tested against tmax padded like the far planes (box_tmax): the
+// computed entry distance of a box may exceed the true one by a few ulps, so
+// comparing it with the exact distance of the current closest hit could cull
+// a box holding a hit that is closer by less than that.
 #include <cstdint>
 
 #include "accel/accelerator.h"
@@ -37,10 +42,17 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
   if constexpr (kCount) stats->rays++;
   if (bvh.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
 
-  const SlabRay sr(ray);
+  // Exact reciprocals for (nearly) zero direction components: the safe
+  // 1 / 1e-30 of SlabRay turns (hi - o) into 0 for a ray lying in a box's
+  // face plane and ends that slab at t = 0. With 1 / +-0 = +-inf the product
+  // is NaN there, which slab_test's comparisons ignore (slab unbounded).
+  SlabRay sr(ray);
+  for (int a = 0; a < 3; ++a)
+    if (std::fabs(ray.dir[a]) < 1e-30f) sr.inv_dir[a] = 1.0f / ray.dir[a];
   const TrianglePrecompute<kTest> pre(ray);
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
+  float box_tmax = tmax * kSlabFarScale;
 
   struct Entry {
     uint32_t node;
@@ -50,7 +62,7 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
   int sp = 0;
 
   float t_root;
-  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, tmax, t_root)) return hit;
+  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, box_tmax, t_root)) return hit;
   uint32_t node = 0;
 
   while (true) {
@@ -65,6 +77,7 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
           if (t < tmax || !hit.valid()) {
             hit = Hit{t, u, v, tri->prim};
             tmax = t;
+            box_tmax = tmax * kSlabFarScale;
             if constexpr (kAnyHit) return hit;
           }
         }
@@ -73,8 +86,8 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
       const Bvh2Node& l = bvh.nodes[n.index];
       const Bvh2Node& r = bvh.nodes[n.index + 1];
       float tl, tr;
-      const bool hl = slab_test(sr, l.lo, l.hi, tmin, tmax, tl);
-      const bool hr = slab_test(sr, r.lo, r.hi, tmin, tmax, tr);
+      const bool hl = slab_test(sr, l.lo, l.hi, tmin, box_tmax, tl);
+      const bool hr = slab_test(sr, r.lo, r.hi, tmin, box_tmax, tr);
       if (hl && hr) {
         uint32_t near = n.index, far = n.index + 1;
         if (tr < tl) {
@@ -98,7 +111,7 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
     while (true) {
       if (sp == 0) return hit;
       const Entry e = stack[--sp];
-      if (e.t <= tmax) {
+      if (e.t <= box_tmax) {
         node = e.node;
         break;
       }

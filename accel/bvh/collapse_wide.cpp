@@ -1,0 +1,252 @@
+#include "accel/bvh/collapse_wide.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <tbb/parallel_invoke.h>
+
+#include "accel/bvh/build_common.h"
+
+namespace raylab {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr uint32_t kParallelDpSize = 8192;  // subtrees with this many references recurse as tasks
+
+class Collapser {
+ public:
+  Collapser(const BinaryBvh& tree, const CollapseOptions& o) : tree_(tree), opt_(o), n_(o.width) {
+    if (n_ != 2 && n_ != 4 && n_ != 8) throw std::invalid_argument("collapse: width must be 2, 4 or 8");
+    opt_.block_width = std::max(1, opt_.block_width);
+    opt_.max_leaf = std::max(1, opt_.max_leaf);
+    counts_ = subtree_ref_counts(tree.nodes);
+    cost_.assign(tree.nodes.size() * n_, kInf);
+    choice_.assign(tree.nodes.size() * n_, 0);
+    inner_split_.assign(tree.nodes.size(), 0);
+  }
+
+  WideTree run() {
+    WideTree out;
+    const auto& nodes = tree_.nodes;
+    if (nodes.empty() || (is_leaf(0) && nodes[0].count == 0)) {
+      out.root_leaf = 0;
+      out.leaf_begin = {0, 0};
+      out.root_box = Aabb::empty();
+      return out;
+    }
+    solve(0);
+    out.root_box = nodes[0].bounds();
+    const float root_area = out.root_box.half_area();
+    if (is_leaf(0) || choice_[0] == 0) {
+      out.root_leaf = 0;
+      out.leaf_begin.push_back(0);
+      gather_leaf(0, out);
+      out.dp_cost = root_area > 0.0f ? cost_[0] / root_area : 0.0;
+      return out;
+    }
+    out.dp_cost = root_area > 0.0f ? cost_[0] / root_area : 0.0;
+    out.leaf_begin.push_back(0);
+    out.nodes.emplace_back();
+    // (binary node, wide node) pairs to expand, depth first.
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
+    std::vector<uint32_t> slots;
+    while (!stack.empty()) {
+      const auto [bnode, wnode] = stack.back();
+      stack.pop_back();
+      slots.clear();
+      const uint32_t l = nodes[bnode].index;
+      const int k = inner_split_[bnode];
+      collect(l, k, slots);
+      collect(l + 1, n_ - k, slots);
+      const size_t first_inner = out.nodes.size();
+      size_t inner = 0;
+      for (uint32_t s : slots) inner += !(is_leaf(s) || choice_[s * n_] == 0);
+      out.nodes.resize(first_inner + inner);
+      WideTree::Node& w = out.nodes[wnode];
+      w.count = static_cast<int>(slots.size());
+      size_t next_inner = first_inner;
+      for (size_t c = 0; c < slots.size(); ++c) {
+        const uint32_t s = slots[c];
+        WideTree::Child& ch = w.child[c];
+        ch.box = nodes[s].bounds();
+        if (is_leaf(s) || choice_[s * n_] == 0) {
+          ch.leaf = true;
+          ch.index = static_cast<uint32_t>(out.leaf_begin.size() - 1);
+          gather_leaf(s, out);
+        } else {
+          ch.leaf = false;
+          ch.index = static_cast<uint32_t>(next_inner++);
+        }
+      }
+      // Push inner children in reverse so the first is expanded first.
+      for (size_t c = slots.size(); c-- > 0;) {
+        const WideTree::Child& ch = out.nodes[wnode].child[c];
+        if (!ch.leaf) stack.push_back({slots[c], ch.index});
+      }
+    }
+    return out;
+  }
+
+ private:
+  bool is_leaf(uint32_t n) const { return tree_.nodes[n].count != 0 || tree_.nodes[n].index == 0; }
+
+  float leaf_cost(uint32_t n, bool forced) const {
+    const uint32_t c = counts_[n];
+    const uint32_t blocks = (c + opt_.block_width - 1) / opt_.block_width;
+    if (!forced && (c > static_cast<uint32_t>(opt_.max_leaf) || blocks > static_cast<uint32_t>(opt_.max_leaf_blocks)))
+      return kInf;
+    return tree_.nodes[n].bounds().half_area() * opt_.block_cost * static_cast<float>(blocks);
+  }
+
+  void solve(uint32_t n) {
+    const Bvh2Node& node = tree_.nodes[n];
+    float* c = &cost_[n * n_];
+    uint8_t* ch = &choice_[n * n_];
+    if (is_leaf(n)) {
+      if (counts_[n] > static_cast<uint32_t>(opt_.max_leaf_blocks * opt_.block_width))
+        throw std::logic_error("collapse: a binary leaf holds more references than a wide leaf can");
+      const float lc = leaf_cost(n, true);
+      for (int i = 0; i < n_; ++i) {
+        c[i] = lc;
+        ch[i] = 0;
+      }
+      return;
+    }
+    const uint32_t l = node.index, r = node.index + 1;
+    if (counts_[n] >= kParallelDpSize) tbb::parallel_invoke([&] { solve(l); }, [&] { solve(r); });
+    else {
+      solve(l);
+      solve(r);
+    }
+    const float* cl = &cost_[l * n_];
+    const float* cr = &cost_[r * n_];
+    float d[9];
+    uint8_t dk[9];
+    for (int i = 2; i <= n_; ++i) {
+      d[i] = kInf;
+      dk[i] = 1;
+      for (int k = 1; k < i; ++k) {
+        const float v = cl[k - 1] + cr[i - k - 1];
+        if (v < d[i]) {
+          d[i] = v;
+          dk[i] = static_cast<uint8_t>(k);
+        }
+      }
+    }
+    const float area = node.bounds().half_area();
+    const float as_leaf = leaf_cost(n, false);
+    const float as_inner = area * opt_.node_cost + d[n_];
+    c[0] = std::min(as_leaf, as_inner);
+    ch[0] = as_leaf <= as_inner ? 0 : 1;
+    for (int i = 2; i <= n_; ++i) {
+      if (c[i - 2] <= d[i]) {
+        c[i - 1] = c[i - 2];
+        ch[i - 1] = 0;
+      } else {
+        c[i - 1] = d[i];
+        ch[i - 1] = dk[i];
+      }
+    }
+    inner_split_[n] = dk[n_];
+  }
+
+  // The binary nodes that become the child slots when n gets i slots.
+  void collect(uint32_t n, int i, std::vector<uint32_t>& out) const {
+    while (i > 1 && choice_[n * n_ + i - 1] == 0) --i;
+    if (i == 1) {
+      out.push_back(n);
+      return;
+    }
+    const int k = choice_[n * n_ + i - 1];
+    const uint32_t l = tree_.nodes[n].index;
+    collect(l, k, out);
+    collect(l + 1, i - k, out);
+  }
+
+  // Appends the references of binary subtree n (duplicates removed) as a new leaf.
+  void gather_leaf(uint32_t n, WideTree& out) const {
+    const size_t begin = out.leaf_prims.size();
+    std::vector<uint32_t>& stack = gather_stack_;
+    stack.assign(1, n);
+    while (!stack.empty()) {
+      const uint32_t x = stack.back();
+      stack.pop_back();
+      const Bvh2Node& node = tree_.nodes[x];
+      if (is_leaf(x)) {
+        out.leaf_prims.insert(out.leaf_prims.end(), tree_.prim_ids.begin() + node.index,
+                              tree_.prim_ids.begin() + node.index + node.count);
+      } else {
+        stack.push_back(node.index + 1);
+        stack.push_back(node.index);
+      }
+    }
+    if (out.leaf_prims.size() - begin > 1) {
+      std::sort(out.leaf_prims.begin() + begin, out.leaf_prims.end());
+      out.leaf_prims.erase(std::unique(out.leaf_prims.begin() + begin, out.leaf_prims.end()), out.leaf_prims.end());
+    }
+    out.leaf_begin.push_back(static_cast<uint32_t>(out.leaf_prims.size()));
+  }
+
+  const BinaryBvh& tree_;
+  CollapseOptions opt_;
+  int n_;
+  std::vector<uint32_t> counts_;
+  std::vector<float> cost_;
+  std::vector<uint8_t> choice_;      // per (node, i): see file comment
+  std::vector<uint8_t> inner_split_; // k of D(n, N)
+  mutable std::vector<uint32_t> gather_stack_;
+};
+
+}  // namespace
+
+WideTree collapse_to_wide(const BinaryBvh& tree, const CollapseOptions& options) {
+  return Collapser(tree, options).run();
+}
+
+WideShape measure_wide(const WideTree& t) {
+  WideShape s;
+  if (t.root_leaf >= 0) {
+    s.leaves = t.leaf_count();
+    s.avg_leaf_size = t.leaf_prims.size();
+    s.sah_cost = kSahIntersectionCost * static_cast<double>(t.leaf_prims.size());
+    return s;
+  }
+  const double root_area = t.root_box.half_area();
+  struct Item {
+    uint32_t node;
+    int depth;
+  };
+  std::vector<Item> stack{{0u, 0}};
+  double cost = 0.0, depth_sum = 0.0, children = 0.0;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    const WideTree::Node& n = t.nodes[it.node];
+    s.nodes++;
+    Aabb box;
+    for (int c = 0; c < n.count; ++c) box.extend(n.child[c].box);
+    cost += kSahTraversalCost * box.half_area();
+    children += n.count;
+    for (int c = 0; c < n.count; ++c) {
+      const WideTree::Child& ch = n.child[c];
+      if (ch.leaf) {
+        s.leaves++;
+        s.max_depth = std::max(s.max_depth, it.depth + 1);
+        depth_sum += it.depth + 1;
+        cost += kSahIntersectionCost * ch.box.half_area() * t.leaf_size(ch.index);
+      } else {
+        stack.push_back({ch.index, it.depth + 1});
+      }
+    }
+  }
+  s.avg_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
+  s.avg_leaf_size = s.leaves ? static_cast<double>(t.leaf_prims.size()) / static_cast<double>(s.leaves) : 0.0;
+  s.child_fill = s.nodes ? children / static_cast<double>(s.nodes) : 0.0;
+  s.sah_cost = root_area > 0.0 ? cost / root_area : 0.0;
+  return s;
+}
+
+}  // namespace raylab

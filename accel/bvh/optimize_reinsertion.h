@@ -1,0 +1,41 @@
+#pragma once
+// Post-build optimisation of a binary BVH by subtree reinsertion, after
+// Bittner, Hapala & Havran, "Fast Insertion-Based Optimization of Bounding
+// Volume Hierarchies" (CGF 2013), in the batched parallel form of Meister &
+// Bittner, "Parallel Reinsertion for Bounding Volume Hierarchy Optimization"
+// (CGF 2018):
+//
+//   repeat until the time budget is spent or a round gains < min_gain:
+//     pick the nodes with the worst inefficiency measure
+//       (area * area/mean child area * area/min child area, Bittner 4.1),
+//     for each, in parallel, find by branch and bound the position where
+//       reinserting its subtree (as the sibling of another node) lowers the
+//       SAH cost most, accounting for the boxes shrinking when it leaves,
+//     apply the improving moves greedily by gain, skipping moves whose
+//       nodes an earlier move of the round already touched, refitting boxes.
+//
+// Leaves are moved whole, so only inner-node areas change; the SAH cost used
+// is the reporting one (bvh2_node.h constants). The result is re-laid out
+// depth first. Trees that would exceed kMaxTreeDepth are left unchanged.
+#include "accel/bvh/build_common.h"
+
+namespace raylab {
+
+struct ReinsertionOptions {
+  double time_budget_ms = 500.0;  // wall-clock bound for the whole optimisation
+  int max_rounds = 32;
+  double batch_fraction = 0.15;   // nodes considered per round, as a fraction of all nodes
+  double min_gain = 2e-4;         // stop when a round improves the SAH cost by less (relative)
+};
+
+struct ReinsertionStats {
+  double sah_before = 0.0, sah_after = 0.0;
+  int rounds = 0;
+  size_t moves = 0;
+  double ms = 0.0;
+};
+
+BinaryBvh optimize_reinsertion(const BinaryBvh& tree, const ReinsertionOptions& options,
+                               ReinsertionStats* stats = nullptr);
+
+}  // namespace raylab

@@ -1,0 +1,203 @@
+#pragma once
+// Binned SAH split search over build references (Wald 2007), shared by the
+// binned builder and SBVH's object splits: references are binned by centroid
+// along each axis, and every bin boundary is a split candidate. Large ranges
+// bin in parallel (TBB reduction of per-chunk bin sets).
+#include <emmintrin.h>
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
+
+#include <limits>
+#include <memory>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include "accel/bvh/build_common.h"
+
+namespace raylab::sah {
+
+inline constexpr int kMaxBins = 256;
+inline constexpr size_t kParallelBinSize = 32768;  // ranges at least this large bin in parallel
+
+// Bins are plain storage (default-initialised, i.e. not at all): a node
+// initialises only the bins it uses, which matters because most nodes are small.
+struct BinSet {
+  __m128 lo[3][kMaxBins];
+  __m128 hi[3][kMaxBins];
+  uint32_t count[3][kMaxBins];
+
+  static std::unique_ptr<BinSet> make(int bins) {
+    std::unique_ptr<BinSet> s(new BinSet);
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) {
+        s->lo[a][b] = inf;
+        s->hi[a][b] = ninf;
+        s->count[a][b] = 0;
+      }
+    return s;
+  }
+  void add(int axis, int bin, const Box4& b) {
+    lo[axis][bin] = _mm_min_ps(lo[axis][bin], b.lo);
+    hi[axis][bin] = _mm_max_ps(hi[axis][bin], b.hi);
+    count[axis][bin]++;
+  }
+  Box4 box(int axis, int bin) const {
+    Box4 r;
+    r.lo = lo[axis][bin];
+    r.hi = hi[axis][bin];
+    return r;
+  }
+  void merge_from(const BinSet& o, int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) {
+        lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
+        hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
+        count[a][b] += o.count[a][b];
+      }
+  }
+};
+
+// Maps centroids to bins: bin = trunc((c - lo) * scale), clamped. Axes with
+// flat centroid bounds get scale 0 (everything in bin 0) and are skipped.
+struct Binning {
+  __m128 lo;
+  __m128 scale;
+  alignas(16) float scale_s[4];
+  __m128i max_bin;
+
+  Binning(const Box4& cbounds, int bins) {
+    lo = cbounds.lo;
+    alignas(16) float ext[4];
+    _mm_store_ps(ext, _mm_sub_ps(cbounds.hi, cbounds.lo));
+    for (int a = 0; a < 3; ++a)
+      scale_s[a] = ext[a] > 0.0f ? static_cast<float>(bins) * (1.0f - 1e-6f) / ext[a] : 0.0f;
+    scale_s[3] = 0.0f;
+    scale = _mm_load_ps(scale_s);
+    max_bin = _mm_set1_epi32(bins - 1);
+  }
+
+  __m128i bins_of(const BuildRef& r) const {
+    const __m128i i = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(r.centroid(), lo), scale));
+#if defined(__SSE4_1__)
+    return _mm_max_epi32(_mm_min_epi32(i, max_bin), _mm_setzero_si128());
+#else
+    const __m128i over = _mm_cmpgt_epi32(i, max_bin);
+    const __m128i clipped = _mm_or_si128(_mm_and_si128(over, max_bin), _mm_andnot_si128(over, i));
+    return _mm_andnot_si128(_mm_cmplt_epi32(clipped, _mm_setzero_si128()), clipped);
+#endif
+  }
+  int bin_of(const BuildRef& r, int axis) const {
+    alignas(16) int32_t v[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(v), bins_of(r));
+    return v[axis];
+  }
+};
+
+struct Split {
+  int axis = -1;
+  int pos = 0;  // references in bins < pos go left
+  float cost = std::numeric_limits<float>::infinity();  // lA*lN + rA*rN
+  Box4 left, right;
+  uint32_t left_count = 0;
+};
+
+
+inline void bin_one(const BuildRef& r, const Binning& bn, BinSet& bins) {
+  alignas(16) int32_t idx[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
+  for (int a = 0; a < 3; ++a) bins.add(a, idx[a], r.box);
+}
+
+// Bins refs[b, e) into `bins` (which must be initialised for nbins). Long
+// ranges alternate between two bin sets: consecutive references often land
+// in the same bin, and each update waits for the previous one's store.
+inline void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& bn, BinSet& bins, int nbins) {
+  if (e - b < 256) {
+    for (size_t i = b; i < e; ++i) bin_one(refs[i], bn, bins);
+    return;
+  }
+  thread_local std::unique_ptr<BinSet> second;
+  if (!second) second.reset(new BinSet);
+  BinSet& other = *second;
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < nbins; ++k) {
+      other.lo[a][k] = inf;
+      other.hi[a][k] = ninf;
+      other.count[a][k] = 0;
+    }
+  size_t i = b;
+  for (; i + 1 < e; i += 2) {
+    bin_one(refs[i], bn, bins);
+    bin_one(refs[i + 1], bn, other);
+  }
+  if (i < e) bin_one(refs[i], bn, bins);
+  bins.merge_from(other, nbins);
+}
+
+// Bins refs[b, e) (in parallel when the range is large).
+inline std::unique_ptr<BinSet> bin_refs(const BuildRef* refs, size_t b, size_t e, const Binning& bn, int nbins) {
+  if (e - b < kParallelBinSize) {
+    auto bins = BinSet::make(nbins);
+    bin_range(refs, b, e, bn, *bins, nbins);
+    return bins;
+  }
+  struct Reducer {
+    const BuildRef* refs;
+    const Binning* bn;
+    int nbins;
+    std::unique_ptr<BinSet> bins;
+    Reducer(const BuildRef* r, const Binning* b, int nb) : refs(r), bn(b), nbins(nb), bins(BinSet::make(nb)) {}
+    Reducer(Reducer& o, tbb::split) : Reducer(o.refs, o.bn, o.nbins) {}
+    void operator()(const tbb::blocked_range<size_t>& r) { bin_range(refs, r.begin(), r.end(), *bn, *bins, nbins); }
+    void join(const Reducer& o) { bins->merge_from(*o.bins, nbins); }
+  } red(refs, &bn, nbins);
+  tbb::parallel_reduce(tbb::blocked_range<size_t>(b, e, 16384), red);
+  return std::move(red.bins);
+}
+
+// The cheapest bin boundary over the three axes (axis -1 when none splits).
+inline Split find_binned_split(const BinSet& bins, const Binning& bn, int nb) {
+  Split best;
+  float right_area[kMaxBins];
+  uint32_t right_count[kMaxBins];
+  __m128 right_lo[kMaxBins], right_hi[kMaxBins];
+  for (int a = 0; a < 3; ++a) {
+    if (bn.scale_s[a] <= 0.0f) continue;
+    Box4 acc;
+    uint32_t cnt = 0;
+    for (int b = nb - 1; b > 0; --b) {
+      acc.extend(bins.box(a, b));
+      cnt += bins.count[a][b];
+      right_lo[b] = acc.lo;
+      right_hi[b] = acc.hi;
+      right_area[b] = acc.half_area();
+      right_count[b] = cnt;
+    }
+    Box4 left;
+    uint32_t lc = 0;
+    for (int b = 1; b < nb; ++b) {
+      left.extend(bins.box(a, b - 1));
+      lc += bins.count[a][b - 1];
+      if (lc == 0 || right_count[b] == 0) continue;
+      const float cost = left.half_area() * static_cast<float>(lc) + right_area[b] * static_cast<float>(right_count[b]);
+      if (cost < best.cost) {
+        best.cost = cost;
+        best.axis = a;
+        best.pos = b;
+        best.left = left;
+        best.right.lo = right_lo[b];
+        best.right.hi = right_hi[b];
+        best.left_count = lc;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace raylab::sah

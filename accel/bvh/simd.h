@@ -1,0 +1,321 @@
+#pragma once
+// Thin SIMD layer for the wide BVH kernels: float vectors of width 4, 8 and 16
+// with the few operations the node and triangle tests need. Comparisons return
+// plain bit masks (bit i = lane i), so kernels branch on integers.
+//
+// The ISA is chosen when the project is compiled (RAYLAB_NATIVE builds with
+// -march=native): AVX-512 (F+VL+DQ+BW) uses mask registers for comparisons and
+// 512-bit vectors for width 16; AVX2+FMA uses 256-bit vectors and movemask;
+// anything else falls back to plain arrays the compiler may vectorise.
+// simd_isa_name() reports which one was compiled in, and
+// simd_isa_supported_by_cpu() checks at run time that the CPU can run it, so a
+// binary copied to an older machine fails with a message instead of SIGILL.
+//
+// No operation here contracts a*b+c implicitly: fmadd() is explicit and only
+// used where the caller has accounted for its rounding (the slab test); the
+// watertight triangle test uses separate mul and sub, like the scalar test.
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512DQ__) && defined(__AVX512BW__)
+#define RAYLAB_SIMD_AVX512 1
+#endif
+#if defined(__AVX2__) && defined(__FMA__)
+#define RAYLAB_SIMD_AVX2 1
+#endif
+#if defined(__FMA__)
+#define RAYLAB_SIMD_FMA 1
+#endif
+
+namespace raylab::simd {
+
+// Name of the instruction set the wide kernels were compiled for.
+inline const char* isa_name() {
+#if defined(RAYLAB_SIMD_AVX512)
+  return "avx512";
+#elif defined(RAYLAB_SIMD_AVX2)
+  return "avx2";
+#elif defined(__SSE2__)
+  return "sse2";
+#else
+  return "scalar";
+#endif
+}
+
+// Widest vector the kernels use natively, in bits (reported in build stats).
+inline int isa_bits() {
+#if defined(RAYLAB_SIMD_AVX512)
+  return 512;
+#elif defined(RAYLAB_SIMD_AVX2)
+  return 256;
+#elif defined(__SSE2__)
+  return 128;
+#else
+  return 32;
+#endif
+}
+
+// True when the running CPU supports the instruction set compiled in.
+inline bool isa_supported_by_cpu() {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#if defined(RAYLAB_SIMD_AVX512)
+  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
+#elif defined(RAYLAB_SIMD_AVX2)
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return true;
+#endif
+#else
+  return true;
+#endif
+}
+
+inline uint32_t ctz(uint32_t m) { return static_cast<uint32_t>(__builtin_ctz(m)); }
+inline int popcount(uint32_t m) { return __builtin_popcount(m); }
+
+// Portable fallback: an array of W floats. Loops are simple enough for the
+// compiler to vectorise with whatever the target offers.
+template <int W>
+struct vfloat {
+  float v[W];
+  static vfloat load(const float* p) {
+    vfloat r;
+    std::memcpy(r.v, p, sizeof r.v);
+    return r;
+  }
+  static vfloat broadcast(float x) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) r.v[i] = x;
+    return r;
+  }
+  void store(float* p) const { std::memcpy(p, v, sizeof v); }
+#define RAYLAB_VF_BINOP(op)                                           \
+  friend vfloat operator op(const vfloat& a, const vfloat& b) {       \
+    vfloat r;                                                         \
+    for (int i = 0; i < W; ++i) r.v[i] = a.v[i] op b.v[i];            \
+    return r;                                                         \
+  }
+  RAYLAB_VF_BINOP(+)
+  RAYLAB_VF_BINOP(-)
+  RAYLAB_VF_BINOP(*)
+  RAYLAB_VF_BINOP(/)
+#undef RAYLAB_VF_BINOP
+#define RAYLAB_VF_CMP(name, op)                                           \
+  friend uint32_t name(const vfloat& a, const vfloat& b) {                \
+    uint32_t m = 0;                                                       \
+    for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(a.v[i] op b.v[i]) << i; \
+    return m;                                                             \
+  }
+  RAYLAB_VF_CMP(cmp_lt, <)
+  RAYLAB_VF_CMP(cmp_le, <=)
+  RAYLAB_VF_CMP(cmp_gt, >)
+  RAYLAB_VF_CMP(cmp_ge, >=)
+  RAYLAB_VF_CMP(cmp_eq, ==)
+  RAYLAB_VF_CMP(cmp_neq, !=)
+#undef RAYLAB_VF_CMP
+  // ~a & b on the bits (andnot(-0.0, x) = |x|).
+  friend vfloat andnot(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      uint32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      x = ~x & y;
+      std::memcpy(&r.v[i], &x, 4);
+    }
+    return r;
+  }
+  // Float min/max through the integer order of the bits (see vfloat<8>).
+  friend vfloat min_bits(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      int32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      r.v[i] = x < y ? a.v[i] : b.v[i];
+    }
+    return r;
+  }
+  friend vfloat max_bits(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      int32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      r.v[i] = x > y ? a.v[i] : b.v[i];
+    }
+    return r;
+  }
+  // min/max with the x86 convention: the second operand wins when either is NaN.
+  friend vfloat min(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) r.v[i] = a.v[i] < b.v[i] ? a.v[i] : b.v[i];
+    return r;
+  }
+  friend vfloat max(const vfloat& a, const vfloat& b) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) r.v[i] = a.v[i] > b.v[i] ? a.v[i] : b.v[i];
+    return r;
+  }
+  // a*b+c with a single rounding (std::fma: exact, but slow without hardware FMA).
+  friend vfloat fmadd(const vfloat& a, const vfloat& b, const vfloat& c) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) r.v[i] = std::fma(a.v[i], b.v[i], c.v[i]);
+    return r;
+  }
+};
+
+#if defined(__SSE2__)
+template <>
+struct vfloat<4> {
+  __m128 v;
+  static vfloat load(const float* p) { return {_mm_load_ps(p)}; }
+  static vfloat broadcast(float x) { return {_mm_set1_ps(x)}; }
+  void store(float* p) const { _mm_store_ps(p, v); }
+  friend vfloat operator+(vfloat a, vfloat b) { return {_mm_add_ps(a.v, b.v)}; }
+  friend vfloat operator-(vfloat a, vfloat b) { return {_mm_sub_ps(a.v, b.v)}; }
+  friend vfloat operator*(vfloat a, vfloat b) { return {_mm_mul_ps(a.v, b.v)}; }
+  friend vfloat operator/(vfloat a, vfloat b) { return {_mm_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm_andnot_ps(a.v, b.v)}; }
+  friend vfloat min(vfloat a, vfloat b) { return {_mm_min_ps(a.v, b.v)}; }
+  friend vfloat max(vfloat a, vfloat b) { return {_mm_max_ps(a.v, b.v)}; }
+#if defined(__SSE4_1__)
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm_castsi128_ps(_mm_min_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm_castsi128_ps(_mm_max_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
+  }
+#else
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    const __m128i x = _mm_castps_si128(a.v), y = _mm_castps_si128(b.v);
+    const __m128i lt = _mm_cmplt_epi32(x, y);
+    return {_mm_castsi128_ps(_mm_or_si128(_mm_and_si128(lt, x), _mm_andnot_si128(lt, y)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    const __m128i x = _mm_castps_si128(a.v), y = _mm_castps_si128(b.v);
+    const __m128i gt = _mm_cmpgt_epi32(x, y);
+    return {_mm_castsi128_ps(_mm_or_si128(_mm_and_si128(gt, x), _mm_andnot_si128(gt, y)))};
+  }
+#endif
+#if defined(RAYLAB_SIMD_AVX512)
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+#else
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(a.v, b.v))); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmple_ps(a.v, b.v))); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpgt_ps(a.v, b.v))); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpge_ps(a.v, b.v))); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpeq_ps(a.v, b.v))); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpneq_ps(a.v, b.v))); }
+#endif
+#if defined(RAYLAB_SIMD_FMA)
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm_fmadd_ps(a.v, b.v, c.v)}; }
+#else
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) {
+    alignas(16) float x[4], y[4], z[4];
+    a.store(x), b.store(y), c.store(z);
+    for (int i = 0; i < 4; ++i) x[i] = std::fma(x[i], y[i], z[i]);
+    return load(x);
+  }
+#endif
+};
+#endif
+
+#if defined(__AVX__)
+template <>
+struct vfloat<8> {
+  __m256 v;
+  static vfloat load(const float* p) { return {_mm256_load_ps(p)}; }
+  static vfloat broadcast(float x) { return {_mm256_set1_ps(x)}; }
+  void store(float* p) const { _mm256_store_ps(p, v); }
+  friend vfloat operator+(vfloat a, vfloat b) { return {_mm256_add_ps(a.v, b.v)}; }
+  friend vfloat operator-(vfloat a, vfloat b) { return {_mm256_sub_ps(a.v, b.v)}; }
+  friend vfloat operator*(vfloat a, vfloat b) { return {_mm256_mul_ps(a.v, b.v)}; }
+  friend vfloat operator/(vfloat a, vfloat b) { return {_mm256_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm256_andnot_ps(a.v, b.v)}; }
+  friend vfloat min(vfloat a, vfloat b) { return {_mm256_min_ps(a.v, b.v)}; }
+  friend vfloat max(vfloat a, vfloat b) { return {_mm256_max_ps(a.v, b.v)}; }
+  // min/max by the signed-integer order of the bits: equal to float min/max
+  // when both are >= +0, and a negative input always wins min / loses max.
+  // One cycle instead of four (Embree's slab test uses the same trick).
+#if defined(__AVX2__)
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm256_castsi256_ps(_mm256_min_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm256_castsi256_ps(_mm256_max_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
+  }
+#else
+  friend vfloat min_bits(vfloat a, vfloat b) { return min(a, b); }
+  friend vfloat max_bits(vfloat a, vfloat b) { return max(a, b); }
+#endif
+#if defined(RAYLAB_SIMD_AVX512)
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+#else
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ))); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ))); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ))); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ))); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_NEQ_UQ))); }
+#endif
+#if defined(RAYLAB_SIMD_FMA)
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm256_fmadd_ps(a.v, b.v, c.v)}; }
+#else
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) {
+    alignas(32) float x[8], y[8], z[8];
+    a.store(x), b.store(y), c.store(z);
+    for (int i = 0; i < 8; ++i) x[i] = std::fma(x[i], y[i], z[i]);
+    return load(x);
+  }
+#endif
+};
+#endif
+
+#if defined(RAYLAB_SIMD_AVX512)
+template <>
+struct vfloat<16> {
+  __m512 v;
+  static vfloat load(const float* p) { return {_mm512_load_ps(p)}; }
+  static vfloat broadcast(float x) { return {_mm512_set1_ps(x)}; }
+  void store(float* p) const { _mm512_store_ps(p, v); }
+  friend vfloat operator+(vfloat a, vfloat b) { return {_mm512_add_ps(a.v, b.v)}; }
+  friend vfloat operator-(vfloat a, vfloat b) { return {_mm512_sub_ps(a.v, b.v)}; }
+  friend vfloat operator*(vfloat a, vfloat b) { return {_mm512_mul_ps(a.v, b.v)}; }
+  friend vfloat operator/(vfloat a, vfloat b) { return {_mm512_div_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {_mm512_andnot_ps(a.v, b.v)}; }
+  friend vfloat min(vfloat a, vfloat b) { return {_mm512_min_ps(a.v, b.v)}; }
+  friend vfloat max(vfloat a, vfloat b) { return {_mm512_max_ps(a.v, b.v)}; }
+  friend vfloat min_bits(vfloat a, vfloat b) {
+    return {_mm512_castsi512_ps(_mm512_min_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+  }
+  friend vfloat max_bits(vfloat a, vfloat b) {
+    return {_mm512_castsi512_ps(_mm512_max_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+  }
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
+};
+#endif
+
+}  // namespace raylab::simd

@@ -1,0 +1,93 @@
+#pragma once
+// Short sorting networks for ordering a wide node's hit children by entry
+// distance. Keys are 64-bit: entry distance bits (non-negative float, so
+// integer order = float order) in the high half, child reference in the low
+// half with its leaf bit flipped (unique per node, so keys never tie; among
+// children at the same distance leaves come first -- rays starting on a
+// surface enter every box around their origin at distance 0, and a leaf
+// there often holds the hit). Sorted descending, the nearest child ends up
+// last, i.e. on top of the traversal stack.
+//
+// The 8-key network is Batcher's odd-even merge sort (19 comparators in 6
+// layers); its first 3 layers sort lanes 0..3 and 4..7 independently, which
+// is all that is needed when at most 4 children were hit (the others are 0).
+// Each layer is one permute, a min, a max and a blend.
+#include <algorithm>
+#include <cstdint>
+
+#include "accel/bvh/simd.h"
+
+namespace raylab {
+
+inline constexpr uint32_t kKeyRefFlip = 0x80000000u;  // the leaf bit of wide child references
+
+// Key of a child: distance clamped at 0 (ordering only needs to be a heuristic
+// for negative entry distances, which arise only when tmin < 0).
+inline uint64_t child_key(float dist, uint32_t ref) {
+  int32_t bits;
+  std::memcpy(&bits, &dist, sizeof bits);
+  bits = std::max(bits, 0);  // negative (or -0): order as 0
+  return (static_cast<uint64_t>(static_cast<uint32_t>(bits)) << 32) | (ref ^ kKeyRefFlip);
+}
+inline float key_dist(uint64_t key) {
+  const uint32_t bits = static_cast<uint32_t>(key >> 32);
+  float d;
+  std::memcpy(&d, &bits, sizeof d);
+  return d;
+}
+inline uint32_t key_ref(uint64_t key) { return static_cast<uint32_t>(key) ^ kKeyRefFlip; }
+
+// Sorts keys[0, n) descending (insertion sort; the portable fallback).
+inline void sort_keys_descending(uint64_t* keys, int n) {
+  for (int i = 1; i < n; ++i) {
+    const uint64_t k = keys[i];
+    int j = i;
+    for (; j > 0 && keys[j - 1] < k; --j) keys[j] = keys[j - 1];
+    keys[j] = k;
+  }
+}
+
+#if defined(RAYLAB_SIMD_AVX512)
+namespace network_detail {
+// The zero-masking forms (with a full mask) avoid GCC 12's spurious
+// -Wuninitialized on the unmasked intrinsics' undefined pass-through operand.
+[[gnu::always_inline]] inline __m512i layer(__m512i v, __m512i partner, __mmask8 take_max) {
+  const __m512i p = _mm512_maskz_permutexvar_epi64(0xFF, partner, v);
+  return _mm512_mask_blend_epi64(take_max, _mm512_maskz_min_epu64(0xFF, v, p), _mm512_maskz_max_epu64(0xFF, v, p));
+}
+}  // namespace network_detail
+
+// Lanes 0..3 and 4..7 each sorted descending.
+[[gnu::always_inline]] inline __m512i sort4x2_descending(__m512i v) {
+  using network_detail::layer;
+  v = layer(v, _mm512_setr_epi64(1, 0, 3, 2, 5, 4, 7, 6), 0x55);
+  v = layer(v, _mm512_setr_epi64(2, 3, 0, 1, 6, 7, 4, 5), 0x33);
+  v = layer(v, _mm512_setr_epi64(0, 2, 1, 3, 4, 6, 5, 7), 0x22);
+  return v;
+}
+
+// All 8 lanes sorted descending.
+[[gnu::always_inline]] inline __m512i sort8_descending(__m512i v) {
+  using network_detail::layer;
+  v = sort4x2_descending(v);
+  v = layer(v, _mm512_setr_epi64(4, 5, 6, 7, 0, 1, 2, 3), 0x0F);
+  v = layer(v, _mm512_setr_epi64(0, 1, 4, 5, 2, 3, 6, 7), 0x0C);
+  v = layer(v, _mm512_setr_epi64(0, 2, 1, 4, 3, 6, 5, 7), 0x2A);
+  return v;
+}
+#endif
+
+// Sorts n <= 8 keys descending in place, with the vector network when
+// available. keys must have room for 8 entries.
+inline void sort8_keys_descending(uint64_t* keys, int n) {
+#if defined(RAYLAB_SIMD_AVX512)
+  const __mmask8 valid = static_cast<__mmask8>((1u << n) - 1u);
+  __m512i v = _mm512_maskz_loadu_epi64(valid, keys);
+  v = n <= 4 ? sort4x2_descending(v) : sort8_descending(v);
+  _mm512_mask_storeu_epi64(keys, valid, v);
+#else
+  sort_keys_descending(keys, n);
+#endif
+}
+
+}  // namespace raylab

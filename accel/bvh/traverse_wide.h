@@ -1,0 +1,381 @@
+#pragma once
+// Single-ray traversal of the N-wide BVH (N = 4 or 8) with W-wide triangle
+// blocks. One routine serves closest hit and any hit (kAnyHit, which returns
+// at the first hit) and the instrumented variant (kCount); both are template
+// parameters, so the uninstrumented kernels pay nothing.
+//
+// Per node: all N child boxes are tested at once with a conservative slab
+// test. With FMA hardware each plane distance is one fused multiply-add,
+// t = x * inv_d - (o * inv_d), where the per-ray product o * inv_d is rounded
+// up for near planes and down for far planes. Rounding is monotonic, so the
+// computed near distance never exceeds round((x - o) * inv_d) and the far one
+// never falls below it: each is at least as accurate as the subtract-then-
+// multiply form of Ize ("Robust BVH Ray Traversal", JCGT 2013), whose far
+// scaling by 1 + 2*gamma(3) therefore still guarantees that no box the ray
+// really crosses is missed. The reductions use integer min/max on the float
+// bits (valid for tmin >= 0, see intersect_children). Rays with a (nearly)
+// zero direction component or a negative tmin take the exact kernel: Ize's
+// form with exact reciprocals and NaN-ignoring min/max. Without FMA every ray
+// takes that form.
+//
+// Closest hit: one hit child is entered directly, two are ordered by one
+// comparison, three or more are sorted by a short sorting network
+// (sort_network.h) and pushed so the nearest is on top. Any hit: leaves
+// first, then descending slot order, no sorting. Pushed children are
+// prefetched. Stack entries are 64-bit keys (distance, child reference) in a
+// fixed array; popped entries farther than the current closest hit are
+// skipped. The triangle test's per-ray constants are computed at the first
+// leaf (many rays never reach one).
+#include <cfloat>
+#include <cstdint>
+
+#include "accel/accelerator.h"
+#include "accel/bvh/bvh_wide_node.h"
+#include "accel/bvh/sort_network.h"
+#include "accel/bvh/triangle_block.h"
+#include "accel/core/slab_test.h"
+
+namespace raylab {
+
+#if defined(RAYLAB_SIMD_FMA)
+#define RAYLAB_HAS_FMA 1
+#else
+#define RAYLAB_HAS_FMA 0
+#endif
+
+// Stack capacity in entries; builds whose depth could exceed it are rejected
+// (see wide_stack_fits).
+inline constexpr int kWideStackSize = 1024;
+
+template <int N>
+inline bool wide_stack_fits(int max_depth) {
+  return max_depth * (N - 1) + 2 * N <= kWideStackSize;
+}
+
+template <int N, int W>
+struct WideView {
+  const WideNode<N>* nodes = nullptr;
+  const TriangleBlock<W>* blocks = nullptr;
+  uint32_t root_ref = wide_ref::kEmpty;
+};
+
+// Per-ray constants of the child-box test.
+template <int N>
+struct WideNodeRay {
+  using V = simd::vfloat<N>;
+  V inv[3];
+#if defined(RAYLAB_SIMD_FMA)
+  V near_shift[3], far_shift[3];  // -(o * inv) rounded so near shrinks and far grows
+#endif
+  V org[3];
+  int near_off[3], far_off[3];  // float offsets of the near / far plane arrays in a node
+};
+
+// True when some direction component is (nearly) zero. Such a ray can lie
+// exactly in a box's face plane, where (hi - o) * (1 / tiny) = 0 would end
+// the slab at t = 0; these rays take the exact-reciprocal kernel instead:
+// 1 / +-0 = +-inf, and the 0 * inf = NaN of a ray in a face plane is dropped
+// by NaN-ignoring min/max, which leaves that slab unbounded, as it should be.
+inline bool ray_is_axis_parallel(const Ray& r) {
+  constexpr float kTiny = 1e-30f;  // as safe_reciprocal in slab_test.h
+  return std::fabs(r.dir.x()) < kTiny || std::fabs(r.dir.y()) < kTiny || std::fabs(r.dir.z()) < kTiny;
+}
+
+// Per-ray constants of the box test: the reciprocals of the slab test (as
+// SlabRay: safe reciprocals, or exact ones for axis_parallel rays, see
+// ray_is_axis_parallel) and the bounds of o * inv. Division is correctly
+// rounded in vector or scalar form, so the values are the scalar code's.
+// Built without branches when AVX is available: setup is a large share of a
+// short ray's cost. (The triangle test's constants are computed lazily, at
+// the first leaf: many rays never reach one.)
+template <int N>
+[[gnu::always_inline]] inline void init_node_ray(WideNodeRay<N>& node, const Ray& r, bool axis_parallel) {
+  float inv[3], shift_up[3], shift_down[3];
+#if defined(__AVX__)
+  const __m128 d = _mm_setr_ps(r.dir.x(), r.dir.y(), r.dir.z(), 1.0f);
+  const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+  // Safe reciprocals: components below 1e-30 in magnitude become +-1e-30.
+  const __m128 tiny = _mm_set1_ps(1e-30f);
+  const __m128 small = _mm_cmplt_ps(_mm_and_ps(d, abs_mask), tiny);
+  const __m128 signed_tiny = _mm_or_ps(tiny, _mm_andnot_ps(abs_mask, d));
+  const __m128 inv4 = _mm_div_ps(_mm_set1_ps(1.0f), axis_parallel ? d : _mm_blendv_ps(d, signed_tiny, small));
+  // o * inv bounded from above and below: |oi| * 2^-22 exceeds one ulp, and
+  // FLT_MIN keeps the bounds off zero and out of the denormals. Overflow to
+  // infinity is kept (up) or clamped to FLT_MAX (down) by NaN-first min/max.
+  const __m128 o = _mm_setr_ps(r.org.x(), r.org.y(), r.org.z(), 0.0f);
+  const __m128 oi = _mm_mul_ps(o, inv4);
+  const __m128 delta = _mm_add_ps(_mm_mul_ps(_mm_and_ps(oi, abs_mask), _mm_set1_ps(0x1p-22f)), _mm_set1_ps(FLT_MIN));
+  const __m128 up = _mm_max_ps(_mm_add_ps(oi, delta), _mm_set1_ps(-FLT_MAX));
+  const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
+  alignas(16) float invv[4], upv[4], downv[4];
+  _mm_store_ps(invv, inv4);
+  _mm_store_ps(upv, up);
+  _mm_store_ps(downv, down);
+  for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
+  const int neg_mask = _mm_movemask_ps(d);
+#else
+  const SlabRay sr(r);
+  int neg_mask = 0;
+  for (int a = 0; a < 3; ++a) {
+    inv[a] = axis_parallel ? 1.0f / r.dir[a] : sr.inv_dir[a];
+    neg_mask |= sr.neg[a] << a;
+    const float oi = r.org[a] * inv[a];
+    const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
+    const float u = oi + delta, dn = oi - delta;
+    shift_up[a] = u == u ? u : -FLT_MAX;
+    shift_down[a] = dn == dn ? dn : FLT_MAX;
+  }
+#endif
+  using V = simd::vfloat<N>;
+  for (int a = 0; a < 3; ++a) {
+    const int neg = (neg_mask >> a) & 1;
+    node.inv[a] = V::broadcast(inv[a]);
+    node.near_off[a] = (2 * a + neg) * N;
+    node.far_off[a] = (2 * a + 1 - neg) * N;
+#if defined(RAYLAB_SIMD_FMA)
+    node.near_shift[a] = V::broadcast(-shift_up[a]);
+    node.far_shift[a] = V::broadcast(-shift_down[a]);
+#else
+    (void)shift_up;
+    (void)shift_down;
+#endif
+    node.org[a] = V::broadcast(r.org[a]);
+  }
+}
+
+// ray_is_valid(r) && r.tmin <= r.tmax, inline: finite origin and direction,
+// non-zero direction, tmin and tmax not NaN, tmin <= tmax.
+inline bool wide_ray_valid(const Ray& r) {
+  const float o[3] = {r.org.x(), r.org.y(), r.org.z()};
+  const float d[3] = {r.dir.x(), r.dir.y(), r.dir.z()};
+  bool finite = true, nonzero = false;
+  for (int a = 0; a < 3; ++a) {
+    finite &= (o[a] - o[a] == 0.0f) & (d[a] - d[a] == 0.0f);  // false for inf and NaN
+    nonzero |= d[a] != 0.0f;
+  }
+  return finite & nonzero & (r.tmin <= r.tmax);  // also false when either is NaN
+}
+
+// Tests the N child boxes of a node; returns the mask of children whose
+// (padded) slab interval overlaps [tmin, tmax], and their entry distances.
+// kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
+// first in min/max (x86 min/max return the second operand when one is NaN),
+// for axis-parallel rays and builds without FMA.
+template <int N, bool kExact>
+[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r,
+                                                          simd::vfloat<N> tmin, simd::vfloat<N> tmax,
+                                                          simd::vfloat<N>& tnear) {
+  using V = simd::vfloat<N>;
+  const float* b = &node.bounds[0][0];
+  // tmax is padded like the far planes: the computed entry distance may
+  // exceed the true one by a few ulps, and a box holding a hit closer than
+  // the current one by less than that must not be culled.
+#if defined(RAYLAB_SIMD_FMA)
+  if constexpr (!kExact) {
+    const V nx = fmadd(V::load(b + r.near_off[0]), r.inv[0], r.near_shift[0]);
+    const V ny = fmadd(V::load(b + r.near_off[1]), r.inv[1], r.near_shift[1]);
+    const V nz = fmadd(V::load(b + r.near_off[2]), r.inv[2], r.near_shift[2]);
+    const V fx = fmadd(V::load(b + r.far_off[0]), r.inv[0], r.far_shift[0]);
+    const V fy = fmadd(V::load(b + r.far_off[1]), r.inv[1], r.far_shift[1]);
+    const V fz = fmadd(V::load(b + r.far_off[2]), r.inv[2], r.far_shift[2]);
+    // Integer-order min/max (kernel precondition: tmin >= +0). The near
+    // distance includes tmin, so its maximum is >= 0 and exact. A negative
+    // far distance may not be the true minimum, but any negative one culls
+    // the box exactly as the true minimum would. The FMA form never yields
+    // -0 for a far plane (the shift is at least FLT_MIN away from o * inv).
+    tnear = max_bits(max_bits(nx, ny), max_bits(nz, tmin));
+    const V tfar = min_bits(min_bits(fx, fy), min_bits(fz, tmax)) * V::broadcast(kSlabFarScale);
+    return cmp_le(tnear, tfar);
+  }
+#endif
+  const V nx = (V::load(b + r.near_off[0]) - r.org[0]) * r.inv[0];
+  const V ny = (V::load(b + r.near_off[1]) - r.org[1]) * r.inv[1];
+  const V nz = (V::load(b + r.near_off[2]) - r.org[2]) * r.inv[2];
+  const V fx = (V::load(b + r.far_off[0]) - r.org[0]) * r.inv[0];
+  const V fy = (V::load(b + r.far_off[1]) - r.org[1]) * r.inv[1];
+  const V fz = (V::load(b + r.far_off[2]) - r.org[2]) * r.inv[2];
+  tnear = max(nx, max(ny, max(nz, tmin)));
+  const V tfar = min(fx, min(fy, min(fz, tmax))) * V::broadcast(kSlabFarScale);
+  return cmp_le(tnear, tfar);
+}
+
+// Prefetches what visiting `ref` will read first: a node's plane arrays, or a
+// leaf's first triangle block. Children are prefetched when pushed, so they
+// are (more likely) in cache when popped.
+inline constexpr int kPrefetchNodeLines = 4;  // a 256-byte 8-wide node
+inline constexpr int kPrefetchLeafLines = 5;  // an 8-wide triangle block (320 bytes)
+
+template <int N, int W>
+[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
+  const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
+                                         : reinterpret_cast<const char*>(bvh.nodes + ref);
+  const int lines = wide_ref::is_leaf(ref) ? kPrefetchLeafLines : kPrefetchNodeLines;
+  for (int i = 0; i < lines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
+}
+
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
+inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+  using V = simd::vfloat<N>;
+  Hit hit;
+  constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
+  WideNodeRay<N> nr;
+  init_node_ray(nr, ray, kAxisParallel);
+  BlockRay<W> br{};  // filled at the first leaf
+  bool br_ready = false;
+  const float tmin = ray.tmin;
+  float tmax = ray.tmax;
+  const V tmin_v = V::broadcast(tmin == 0.0f ? 0.0f : tmin);  // -0 as +0 for the integer-order min/max
+
+  alignas(64) uint64_t stack[kWideStackSize];
+  int sp = 0;
+  uint32_t cur = bvh.root_ref;
+
+  // Next subtree from the stack that can still hold a closer hit.
+  auto pop = [&]() -> bool {
+    while (sp > 0) {
+      const uint64_t e = stack[--sp];
+      if constexpr (!kAnyHit) {
+        if (key_dist(e) > tmax * kSlabFarScale) continue;
+      }
+      cur = key_ref(e);
+      return true;
+    }
+    return false;
+  };
+
+  while (true) {
+    if (!wide_ref::is_leaf(cur)) {
+      if constexpr (kCount) stats->nodes_visited++;
+      const WideNode<N>& node = bvh.nodes[cur];
+      V tnear;
+      uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(tmax), tnear);
+      if (mask == 0) {
+        if (!pop()) return hit;
+        continue;
+      }
+      const uint32_t* child = node.child;
+      const uint32_t i0 = simd::ctz(mask);
+      const uint32_t rest = mask & (mask - 1);
+      if (rest == 0) {
+        cur = child[i0];
+        continue;
+      }
+      if constexpr (kAnyHit) {
+        // Any hit: no ordering by distance. A ray leaving a surface starts
+        // just outside the leaf box of the triangle it will hit first, and
+        // every other box around its origin ties at distance 0, so distance
+        // order is a poor guess here. Leaf children go first (one test may end
+        // the ray), then children in descending slot order (as Embree's
+        // occlusion traversal); measured best on the benchmark scenes.
+        uint32_t leaves = 0;
+        for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
+        leaves &= mask;
+        for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
+          const uint32_t c = child[simd::ctz(m)];
+          prefetch_child(bvh, c);
+          stack[sp++] = child_key(0.0f, c);
+        }
+        if (leaves == 0) {
+          cur = key_ref(stack[--sp]);
+          continue;
+        }
+        while (true) {
+          const uint32_t c = child[simd::ctz(leaves)];
+          leaves &= leaves - 1;
+          if (leaves == 0) {
+            cur = c;
+            break;
+          }
+          prefetch_child(bvh, c);
+          stack[sp++] = child_key(0.0f, c);
+        }
+        continue;
+      }
+      alignas(64) float dist[N];
+      tnear.store(dist);
+      const uint32_t i1 = simd::ctz(rest);
+      if ((rest & (rest - 1)) == 0) {
+        // Two children: order their keys with min/max (no branch to mispredict).
+        const uint64_t k0 = child_key(dist[i0], child[i0]);
+        const uint64_t k1 = child_key(dist[i1], child[i1]);
+        prefetch_child(bvh, key_ref(std::max(k0, k1)));
+        stack[sp++] = std::max(k0, k1);
+        cur = key_ref(std::min(k0, k1));
+        continue;
+      }
+      // Three or more: sort by distance, push all but the nearest.
+      const int k = simd::popcount(mask);
+#if defined(RAYLAB_SIMD_AVX512)
+      if constexpr (N == 8) {
+        const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
+        // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
+        const __m512i keys = _mm512_or_si512(
+            _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
+            _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
+                                                                 _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
+        __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
+        sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
+        _mm512_storeu_si512(stack + sp, sorted);
+        for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
+        sp += k - 1;
+        cur = key_ref(stack[sp]);
+        continue;
+      }
+#endif
+      uint64_t* keys = stack + sp;
+      int n = 0;
+      for (uint32_t m = mask; m != 0; m &= m - 1) {
+        const uint32_t i = simd::ctz(m);
+        keys[n++] = child_key(dist[i], child[i]);
+      }
+      sort8_keys_descending(keys, n);
+      sp += k - 1;
+      cur = key_ref(stack[sp]);
+      continue;
+    }
+
+    // Leaf: test its triangle blocks.
+    if (!br_ready) {
+      br.init(WatertightRay(ray));
+      br_ready = true;
+    }
+    const uint32_t nblocks = wide_ref::leaf_blocks(cur);
+    const TriangleBlock<W>* blk = bvh.blocks + wide_ref::leaf_first(cur);
+    if constexpr (kCount) stats->nodes_visited += nblocks != 0;
+    for (uint32_t b = 0; b < nblocks; ++b) {
+      if constexpr (kCount) stats->triangle_tests += static_cast<uint64_t>(blk[b].count());
+      BlockHits<W> bh;
+      uint32_t m = intersect_block<W>(blk[b], br, tmin, tmax, bh);
+      if (m == 0) continue;
+      uint32_t best = simd::ctz(m);
+      if constexpr (kAnyHit) return Hit{bh.t[best], bh.u[best], bh.v[best], blk[b].prim[best]};
+      float bt = bh.t[best];
+      for (m &= m - 1; m != 0; m &= m - 1) {
+        const uint32_t i = simd::ctz(m);
+        if (bh.t[i] < bt) {
+          bt = bh.t[i];
+          best = i;
+        }
+      }
+      if (bt < tmax || !hit.valid()) {
+        hit = Hit{bt, bh.u[best], bh.v[best], blk[b].prim[best]};
+        tmax = bt;
+      }
+    }
+    if (!pop()) return hit;
+  }
+}
+
+// The traversal entry point: validity check, then the kernel for the ray's kind.
+template <int N, int W, bool kAnyHit, bool kCount>
+inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+  if constexpr (kCount) stats->rays++;
+  if (!wide_ray_valid(ray)) return Hit{};
+  // The fast kernel needs finite reciprocals and tmin >= 0 (see
+  // intersect_children); everything else takes the exact form.
+  if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f)) [[unlikely]]
+    return traverse_wide_kernel<N, W, kAnyHit, kCount, true>(bvh, ray, stats);
+  return traverse_wide_kernel<N, W, kAnyHit, kCount, false>(bvh, ray, stats);
+}
+
+}  // namespace raylab

@@ -1,0 +1,157 @@
+#pragma once
+// Leaf triangles of the wide BVH layouts, W at a time: a TriangleBlock holds
+// the vertices of up to W triangles in structure-of-arrays order, and
+// intersect_block() runs the watertight test of Woop, Benthin & Wald (JCGT
+// 2013) on all W lanes at once.
+//
+// The vector test computes exactly what the scalar intersect_watertight()
+// computes, lane by lane: the same translation p - org, the same shear
+// (mul then sub, never fused), the same edge functions cx*by - cy*bx etc.
+// (so a shared edge gives exactly opposite values in its two triangles), the
+// same double-precision recomputation when an edge function is exactly 0,
+// and the same t = (u*az + v*bz + w*cz) * (1/det). Watertightness therefore
+// carries over unchanged, and tests compare the two bit for bit.
+//
+// Only the vertices are stored: precomputing edges (as Moller-Trumbore
+// layouts do) would change the rounding of p - org and break the shared-edge
+// argument. Lanes past a leaf's last triangle repeat its first triangle (same
+// answer, no masking needed in the hot loop).
+#include <cstdint>
+
+#include "accel/bvh/simd.h"
+#include "accel/core/intersect_triangle.h"
+
+namespace raylab {
+
+template <int W>
+struct alignas(W >= 8 ? 64 : 32) TriangleBlock {
+  float v[3][3][W];   // v[corner][axis][lane]
+  uint32_t prim[W];   // triangle ids; padding lanes repeat prim[0]
+
+  // Number of distinct triangles (padding lanes excluded), for statistics.
+  int count() const {
+    int c = 1;
+    for (int i = 1; i < W; ++i) c += prim[i] != prim[0];
+    return c;
+  }
+};
+
+// Per-ray constants of the block test: the same values as WatertightRay
+// (axis permutation, shear constants), broadcast to W lanes.
+template <int W>
+struct BlockRay {
+  using V = simd::vfloat<W>;
+  V ox, oy, oz;            // origin components along kx, ky, kz
+  V sx, sy, sz;            // shear constants
+  int off_x, off_y, off_z; // kx*W, ky*W, kz*W: offsets of the permuted axes in a block
+
+  BlockRay() = default;
+  explicit BlockRay(const Ray& r) { init(WatertightRay(r)); }
+  void init(const WatertightRay& w) {
+    ox = V::broadcast(w.org[w.kx]);
+    oy = V::broadcast(w.org[w.ky]);
+    oz = V::broadcast(w.org[w.kz]);
+    sx = V::broadcast(w.sx);
+    sy = V::broadcast(w.sy);
+    sz = V::broadcast(w.sz);
+    off_x = w.kx * W;
+    off_y = w.ky * W;
+    off_z = w.kz * W;
+  }
+};
+
+template <int W>
+struct BlockHits {
+  alignas(64) float t[W];
+  alignas(64) float u[W];
+  alignas(64) float v[W];
+};
+
+// Tests all W lanes; returns the mask of lanes hit with tmin <= t <= tmax and
+// fills t, u, v for them.
+template <int W>
+[[gnu::always_inline]] inline uint32_t intersect_block(const TriangleBlock<W>& blk, const BlockRay<W>& r, float tmin, float tmax,
+                                BlockHits<W>& out) {
+  using V = simd::vfloat<W>;
+  const float* p0 = &blk.v[0][0][0];
+  const float* p1 = &blk.v[1][0][0];
+  const float* p2 = &blk.v[2][0][0];
+  // Translate (a = p - org), then shear along the dominant axis.
+  const V az0 = V::load(p0 + r.off_z) - r.oz;
+  const V bz0 = V::load(p1 + r.off_z) - r.oz;
+  const V cz0 = V::load(p2 + r.off_z) - r.oz;
+  const V ax = (V::load(p0 + r.off_x) - r.ox) - r.sx * az0;
+  const V ay = (V::load(p0 + r.off_y) - r.oy) - r.sy * az0;
+  const V bx = (V::load(p1 + r.off_x) - r.ox) - r.sx * bz0;
+  const V by = (V::load(p1 + r.off_y) - r.oy) - r.sy * bz0;
+  const V cx = (V::load(p2 + r.off_x) - r.ox) - r.sx * cz0;
+  const V cy = (V::load(p2 + r.off_y) - r.oy) - r.sy * cz0;
+
+  V u = cx * by - cy * bx;
+  V v = ax * cy - ay * cx;
+  V w = bx * ay - by * ax;
+  const V zero = V::broadcast(0.0f);
+  const uint32_t zeros = cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero);
+  if (zeros != 0) [[unlikely]] {
+    // An edge function is exactly 0: recompute that lane's three in double
+    // precision, as the scalar test does.
+    alignas(64) float fax[W], fay[W], fbx[W], fby[W], fcx[W], fcy[W], fu[W], fv[W], fw[W];
+    ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
+    u.store(fu), v.store(fv), w.store(fw);
+    for (uint32_t m = zeros; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
+      fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
+      fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
+    }
+    u = V::load(fu), v = V::load(fv), w = V::load(fw);
+  }
+  // Reject when the edge functions have mixed signs (a lane with a NaN edge
+  // function passes here, as in the scalar test, and fails the range test).
+  const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
+  const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
+  constexpr uint32_t kAll = W == 32 ? ~0u : (1u << W) - 1u;
+  uint32_t mask = ~(neg & pos) & kAll;
+  if (mask == 0) return 0;
+  const V det = u + v + w;
+  mask &= cmp_neq(det, zero);
+  if (mask == 0) return 0;
+  const V tt = u * (r.sz * az0) + v * (r.sz * bz0) + w * (r.sz * cz0);
+  if (tmin >= 0.0f) {
+    // Behind the origin without dividing: where tt and det have opposite
+    // signs, t = tt * (1 / det) is negative, hence < tmin -- unless it
+    // underflows to -0, which needs |tt| < |det| * 2^-100 (those lanes are
+    // left to the full test). Rays leaving a surface meet their own
+    // triangle this way in most leaves they visit.
+    const uint32_t opposite = (cmp_lt(tt, zero) & cmp_gt(det, zero)) | (cmp_gt(tt, zero) & cmp_lt(det, zero));
+    const V abs_mask = V::broadcast(-0.0f);
+    const uint32_t large = cmp_ge(andnot(abs_mask, tt), andnot(abs_mask, det) * V::broadcast(0x1p-100f));
+    mask &= ~(opposite & large);
+    if (mask == 0) return 0;
+  }
+  const V inv_det = V::broadcast(1.0f) / det;
+  const V t = tt * inv_det;
+  mask &= cmp_ge(t, V::broadcast(tmin)) & cmp_le(t, V::broadcast(tmax));
+  if (mask != 0) {
+    t.store(out.t);
+    (v * inv_det).store(out.u);
+    (w * inv_det).store(out.v);
+  }
+  return mask;
+}
+
+// Fills a block from up to W triangles (ids and their three vertices);
+// missing lanes repeat the first triangle.
+template <int W, typename VertexFn>
+inline void fill_block(TriangleBlock<W>& blk, const uint32_t* prims, int count, VertexFn&& vertex) {
+  for (int lane = 0; lane < W; ++lane) {
+    const uint32_t prim = prims[lane < count ? lane : 0];
+    blk.prim[lane] = prim;
+    for (int c = 0; c < 3; ++c) {
+      const Vec3f& p = vertex(prim, c);
+      for (int a = 0; a < 3; ++a) blk.v[c][a][lane] = p[a];
+    }
+  }
+}
+
+}  // namespace raylab

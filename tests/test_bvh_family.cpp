@@ -1,0 +1,764 @@
+// The BVH family (accel/bvh): every builder x layout agrees with brute force;
+// the SAH-optimal wide collapse keeps every triangle exactly once under
+// enclosing boxes and beats a greedy collapse; SBVH references cover their
+// triangles; LBVH copes with coincident centroids; reinsertion lowers the SAH
+// cost; the vectorised watertight test equals the scalar one bit for bit and
+// leaks nothing on closed spheres; the sorting network sorts.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "accel/bvh/build_binned_sah.h"
+#include "accel/bvh/build_lbvh.h"
+#include "accel/bvh/build_sbvh.h"
+#include "accel/bvh/build_sweep_sah.h"
+#include "accel/bvh/bvh_accel.h"
+#include "accel/bvh/bvh_wide_node.h"
+#include "accel/bvh/collapse_wide.h"
+#include "accel/bvh/optimize_reinsertion.h"
+#include "accel/bvh/sort_network.h"
+#include "accel/bvh/triangle_block.h"
+#include "accel/registry.h"
+#include "bench/ray_sets.h"
+#include "scenes/procedural.h"
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+// ---------------------------------------------------------------------------
+// Helpers
+
+struct Prims {
+  std::vector<Aabb> boxes;
+  std::vector<Vec3f> centroids;
+};
+
+Prims prims_of(const TriangleMesh& m) {
+  Prims p;
+  for (size_t i = 0; i < m.num_triangles(); ++i) {
+    p.boxes.push_back(m.triangle_bounds(i));
+    p.centroids.push_back(p.boxes.back().center());
+  }
+  return p;
+}
+
+BinaryBvh build_with(const std::string& builder, const TriangleMesh& mesh, int leaf_threshold = 1) {
+  const Prims p = prims_of(mesh);
+  BuildOptions bo;
+  bo.leaf_threshold = leaf_threshold;
+  if (builder == "binned") return build_binned_sah(p.boxes, p.centroids, bo);
+  if (builder == "sweep") return build_sweep_sah(p.boxes, p.centroids, bo);
+  if (builder == "lbvh") return build_lbvh(p.boxes, p.centroids);
+  if (builder == "reinsert") return optimize_reinsertion(build_binned_sah(p.boxes, p.centroids, bo), {});
+  SbvhOptions so;
+  so.base = bo;
+  so.alpha = 0.0f;
+  so.split_budget = 1.0f;
+  return build_sbvh(p.boxes, p.centroids, TriangleSplitter(mesh), so);
+}
+
+bool is_leaf(const Bvh2Node& n) { return n.count != 0 || n.index == 0; }
+
+// Every reference of a binary tree, and a check that children lie inside
+// their parents' boxes.
+void check_binary_tree(const BinaryBvh& t, const TriangleMesh& mesh, bool duplicates_allowed) {
+  std::vector<int> seen(mesh.num_triangles(), 0);
+  std::vector<uint32_t> stack{0};
+  size_t visited = 0;
+  while (!stack.empty()) {
+    const uint32_t i = stack.back();
+    stack.pop_back();
+    ++visited;
+    const Bvh2Node& n = t.nodes[i];
+    const Aabb box = n.bounds();
+    if (is_leaf(n)) {
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) {
+        const uint32_t prim = t.prim_ids[k];
+        ASSERT_LT(prim, mesh.num_triangles());
+        seen[prim]++;
+        if (!duplicates_allowed) {
+          EXPECT_TRUE(box.contains(mesh.triangle_bounds(prim))) << "leaf " << i;
+        }
+      }
+      continue;
+    }
+    ASSERT_LT(n.index + 1, t.nodes.size());
+    ASSERT_GT(n.index, i) << "children must follow their parent";
+    for (uint32_t c : {n.index, n.index + 1}) {
+      EXPECT_TRUE(box.contains(t.nodes[c].bounds())) << "node " << i << " child " << c;
+      stack.push_back(c);
+    }
+  }
+  EXPECT_EQ(visited, t.nodes.size()) << "every node is reachable exactly once";
+  for (size_t p = 0; p < seen.size(); ++p) {
+    if (duplicates_allowed) EXPECT_GE(seen[p], 1) << "triangle " << p;
+    else EXPECT_EQ(seen[p], 1) << "triangle " << p;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Every builder x layout against brute force
+
+std::vector<std::string> family_specs() {
+  std::vector<std::string> specs;
+  for (const char* b : {"binned", "sweep", "sbvh", "lbvh"})
+    for (const char* l : {"bvh2", "bvh4", "bvh8"}) specs.push_back(fmt::format("bvh:builder={},layout={}", b, l));
+  for (const char* extra :
+       {"bvh:opt=reinsert,layout=bvh2", "bvh:opt=reinsert,layout=bvh8", "bvh:opt=reinsert,builder=sbvh,layout=bvh4",
+        "bvh:block=4,leaf=4,bleaf=1", "bvh:block=8,leaf=8", "bvh:block=16,leaf=48", "bvh:layout=bvh4,block=16",
+        "bvh:builder=sbvh,alpha=0,budget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8", "bvh:layout=bvh2,leaf=1",
+        "bvh:ct=4,ci=0.5", "bvh:bins=4"})
+    specs.push_back(extra);
+  return specs;
+}
+
+struct Reference {
+  Scene scene;
+  std::vector<RaySet> sets;
+  std::vector<std::vector<Hit>> hits;  // brute force, per set
+};
+
+const std::vector<Reference>& references() {
+  static const std::vector<Reference> refs = [] {
+    std::vector<Reference> out;
+    std::vector<Scene> scenes;
+    scenes.push_back(make_triangle_soup(2500, 17));
+    scenes.push_back(make_triangle_soup(400, 5, 6.0f));  // long, heavily overlapping triangles
+    scenes.push_back(make_cornell_box());
+    Scene sphere = make_triangle_soup(1, 1);
+    sphere.mesh = make_uv_sphere(40, 20, Vec3f(0.5f, 0.5f, 0.5f), 0.4f);
+    sphere.name = "sphere";
+    scenes.push_back(sphere);
+    for (Scene& s : scenes) {
+      Reference r;
+      auto brute = make_accelerator("brute");
+      brute->build(s.mesh);
+      RaySetOptions o;
+      o.jittered_primary = true;
+      o.primary_count = 1500;
+      o.random_count = 1500;
+      r.sets = make_ray_sets(s, {"primary", "random", "diffuse"}, *brute, o);
+      for (const RaySet& set : r.sets) {
+        std::vector<Hit> h(set.rays.size());
+        brute->intersect(set.rays, h);
+        r.hits.push_back(std::move(h));
+      }
+      r.scene = std::move(s);
+      out.push_back(std::move(r));
+    }
+    return out;
+  }();
+  return refs;
+}
+
+class BvhFamily : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(BvhFamily, AgreesWithBruteForce) {
+  for (const Reference& ref : references()) {
+    auto accel = make_accelerator(GetParam());
+    const BuildStats st = accel->build(ref.scene.mesh);
+    EXPECT_TRUE(st.nodes > 0 || st.leaves == 1) << "a single leaf needs no node";
+    EXPECT_GT(st.leaves, 0u);
+    EXPECT_GT(st.bytes, 0u);
+    EXPECT_TRUE(std::isfinite(st.sah_cost) && st.sah_cost > 0.0) << GetParam();
+    size_t hits = 0;
+    for (size_t s = 0; s < ref.sets.size(); ++s) {
+      const auto& rays = ref.sets[s].rays;
+      const auto& want = ref.hits[s];
+      std::vector<Hit> got(rays.size());
+      std::vector<uint8_t> occ(rays.size());
+      accel->intersect(rays, got);
+      accel->occluded(rays, occ);
+      size_t bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        hits += want[i].valid();
+        // Same watertight test on the same vertices: the same triangle gives
+        // bit-identical results; a different one must be an exact tie.
+        const bool same = got[i].valid() == want[i].valid() &&
+                          (!got[i].valid() || got[i].prim == want[i].prim || got[i].t == want[i].t);
+        if (!same && bad++ < 3)
+          ADD_FAILURE() << GetParam() << " " << ref.scene.name << " " << ref.sets[s].name << " ray " << i << ": prim "
+                        << got[i].prim << " t " << got[i].t << ", brute prim " << want[i].prim << " t " << want[i].t;
+        if (got[i].valid() && got[i].prim == want[i].prim) {
+          EXPECT_EQ(got[i].t, want[i].t);
+          EXPECT_EQ(got[i].u, want[i].u);
+          EXPECT_EQ(got[i].v, want[i].v);
+        }
+        EXPECT_EQ(occ[i] != 0, want[i].valid()) << GetParam() << " occlusion vs closest hit, ray " << i;
+      }
+      EXPECT_EQ(bad, 0u) << GetParam() << " on " << ref.scene.name << " " << ref.sets[s].name;
+    }
+    EXPECT_GT(hits, 300u) << "the ray sets must hit something on " << ref.scene.name;
+  }
+}
+
+TEST_P(BvhFamily, InstrumentedKernelCountsAndAgrees) {
+  const Reference& ref = references()[0];
+  auto accel = make_accelerator(GetParam());
+  accel->build(ref.scene.mesh);
+  const auto& rays = ref.sets[1].rays;
+  std::vector<Hit> plain(rays.size()), counted(rays.size());
+  std::vector<uint8_t> occ_plain(rays.size()), occ_counted(rays.size());
+  TraversalStats st, st_occ;
+  accel->intersect(rays, plain);
+  accel->intersect(rays, counted, &st);
+  accel->occluded(rays, occ_plain);
+  accel->occluded(rays, occ_counted, &st_occ);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_EQ(plain[i].prim, counted[i].prim);
+    ASSERT_EQ(occ_plain[i], occ_counted[i]);
+  }
+  EXPECT_EQ(st.rays, rays.size());
+  EXPECT_GT(st.nodes_visited, rays.size());
+  EXPECT_GT(st.triangle_tests, 0u);
+  // Any hit stops early: never more work than closest hit on the same rays.
+  EXPECT_LE(st_occ.triangle_tests, st.triangle_tests);
+}
+
+INSTANTIATE_TEST_SUITE_P(Combinations, BvhFamily, ::testing::ValuesIn(family_specs()), [](const auto& info) {
+  std::string n = info.param.substr(4);
+  for (char& c : n)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return n;
+});
+
+TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
+  const Scene s = make_triangle_soup(1000, 3);
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2"}) {
+    auto a = make_accelerator(spec);
+    const BuildStats st = a->build(s.mesh);
+    EXPECT_GT(st.build_ms, 0.0);
+    EXPECT_GT(st.max_depth, 0);
+    EXPECT_GT(st.avg_depth, 0.0);
+    EXPECT_TRUE(st.extra.count("sah_tree")) << spec;
+    EXPECT_TRUE(st.extra.count("ms_tree")) << spec;
+    if (std::string(spec) != "bvh:layout=bvh2") {
+      ASSERT_TRUE(st.extra.count("simd_bits")) << spec;
+      EXPECT_GE(st.extra.at("simd_bits"), 32.0);
+    }
+  }
+  EXPECT_FALSE(bvh_kernel_isa().empty());
+  EXPECT_NE(bvh_kernel_isa(), "unknown");
+}
+
+TEST(BvhFamily, RejectsBadParameters) {
+  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt",
+                           "bvh:bins=1", "bvh:alpha=-1", "bvh:budget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
+                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_ms=-1", "bvh:smin=-2", "bvh:nodes=3"})
+    EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
+  EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
+  EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
+}
+
+TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {
+  // 600 copies of one triangle plus 600 of another: identical centroids
+  // force the median fallbacks; every copy must stay reachable.
+  TriangleMesh m;
+  m.vertices = {Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1), Vec3f(0, 0, 2), Vec3f(1, 0, 2), Vec3f(0, 1, 2)};
+  for (int i = 0; i < 600; ++i) m.triangles.push_back({0, 1, 2}), m.triangles.push_back({3, 4, 5});
+  for (const char* b : {"binned", "sweep", "sbvh", "lbvh"}) {
+    for (const char* l : {"bvh2", "bvh8"}) {
+      const std::string spec = fmt::format("bvh:builder={},layout={}", b, l);
+      auto a = make_accelerator(spec);
+      const BuildStats st = a->build(m);
+      EXPECT_LT(st.max_depth, 64) << spec;
+      const Hit h = a->intersect1(Ray(Vec3f(0.2f, 0.2f, 0), Vec3f(0, 0, 1)));
+      ASSERT_TRUE(h.valid()) << spec;
+      EXPECT_EQ(h.t, 1.0f) << spec;
+      EXPECT_EQ(m.triangles[h.prim][0], 0u) << spec;
+      EXPECT_TRUE(a->occluded1(Ray(Vec3f(0.2f, 0.2f, 3), Vec3f(0, 0, -1)))) << spec;
+    }
+    const BinaryBvh t = build_with(b, m);
+    check_binary_tree(t, m, std::string(b) == "sbvh");
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Builders and the wide collapse
+
+TEST(BvhBuilders, BinaryTreesHoldEveryTriangleOnceInsideEnclosingBoxes) {
+  const Scene s = make_triangle_soup(3000, 23);
+  for (const char* b : {"binned", "sweep", "lbvh", "reinsert"}) {
+    SCOPED_TRACE(b);
+    check_binary_tree(build_with(b, s.mesh), s.mesh, false);
+    check_binary_tree(build_with(b, s.mesh, 4), s.mesh, false);
+  }
+  check_binary_tree(build_with("sbvh", s.mesh), s.mesh, true);
+}
+
+TEST(BvhBuilders, SweepIsNoWorseThanBinnedAndLbvhNoBetter) {
+  // The full sweep evaluates a superset of the binned candidates at each
+  // node; LBVH ignores the SAH. Compared on a clustered scene.
+  const Scene s = make_triangle_soup(4000, 31);
+  const double binned = tree_sah_cost(build_with("binned", s.mesh).nodes);
+  const double sweep = tree_sah_cost(build_with("sweep", s.mesh).nodes);
+  const double lbvh = tree_sah_cost(build_with("lbvh", s.mesh).nodes);
+  EXPECT_LE(sweep, binned * 1.01);
+  EXPECT_GT(lbvh, sweep);
+}
+
+// The DP's objective evaluated on its own output.
+double collapse_cost(const WideTree& t, const CollapseOptions& o) {
+  auto blocks = [&](uint32_t n) { return static_cast<double>((n + o.block_width - 1) / o.block_width); };
+  if (t.root_leaf >= 0) return o.block_cost * blocks(t.leaf_size(0));
+  double cost = 0.0;
+  for (const WideTree::Node& n : t.nodes) {
+    Aabb box;
+    for (int c = 0; c < n.count; ++c) box.extend(n.child[c].box);
+    cost += o.node_cost * box.half_area();
+    for (int c = 0; c < n.count; ++c)
+      if (n.child[c].leaf) cost += o.block_cost * n.child[c].box.half_area() * blocks(t.leaf_size(n.child[c].index));
+  }
+  return cost / t.root_box.half_area();
+}
+
+// Greedy top-down collapse (open the largest inner child until the node is
+// full), with binary leaves as leaves: what level skipping would give.
+double greedy_cost(const BinaryBvh& t, const CollapseOptions& o, const std::vector<uint32_t>& counts) {
+  double cost = 0.0;
+  std::vector<uint32_t> stack{0};
+  while (!stack.empty()) {
+    const uint32_t x = stack.back();
+    stack.pop_back();
+    cost += o.node_cost * t.nodes[x].bounds().half_area();
+    std::vector<uint32_t> slots{t.nodes[x].index, t.nodes[x].index + 1};
+    while (static_cast<int>(slots.size()) < o.width) {
+      int best = -1;
+      float area = -1.0f;
+      for (size_t i = 0; i < slots.size(); ++i)
+        if (!is_leaf(t.nodes[slots[i]]) && t.nodes[slots[i]].bounds().half_area() > area)
+          area = t.nodes[slots[i]].bounds().half_area(), best = static_cast<int>(i);
+      if (best < 0) break;
+      const uint32_t open = slots[best];
+      slots.erase(slots.begin() + best);
+      slots.push_back(t.nodes[open].index);
+      slots.push_back(t.nodes[open].index + 1);
+    }
+    for (uint32_t s : slots) {
+      if (is_leaf(t.nodes[s]))
+        cost += o.block_cost * t.nodes[s].bounds().half_area() *
+                static_cast<double>((counts[s] + o.block_width - 1) / o.block_width);
+      else
+        stack.push_back(s);
+    }
+  }
+  return cost / t.nodes[0].bounds().half_area();
+}
+
+TEST(BvhCollapse, EveryTriangleReachableOnceAndBoxesEnclose) {
+  const Scene s = make_triangle_soup(3000, 41);
+  for (const char* b : {"binned", "lbvh", "reinsert"}) {
+    const BinaryBvh tree = build_with(b, s.mesh);
+    for (int width : {2, 4, 8}) {
+      for (int block : {1, 4, 8, 16}) {
+        if ((width == 2) != (block == 1)) continue;
+        SCOPED_TRACE(fmt::format("{} width {} block {}", b, width, block));
+        CollapseOptions o;
+        o.width = width;
+        o.block_width = block;
+        o.max_leaf = width == 2 ? 4 : 2 * block;
+        o.node_cost = 2.0f;
+        const WideTree w = collapse_to_wide(tree, o);
+        ASSERT_LT(w.root_leaf, 0);
+        std::vector<int> seen(s.mesh.num_triangles(), 0);
+        for (size_t leaf = 0; leaf < w.leaf_count(); ++leaf) {
+          EXPECT_LE(static_cast<int>(w.leaf_size(leaf)), o.max_leaf);
+          for (uint32_t k = w.leaf_begin[leaf]; k < w.leaf_begin[leaf + 1]; ++k) seen[w.leaf_prims[k]]++;
+        }
+        for (int c : seen) ASSERT_EQ(c, 1);
+        // Each node's child boxes enclose what lies below them.
+        std::vector<int> parents(w.nodes.size(), 0);
+        for (const WideTree::Node& n : w.nodes) {
+          EXPECT_GE(n.count, 2);
+          EXPECT_LE(n.count, width);
+          for (int c = 0; c < n.count; ++c) {
+            const WideTree::Child& ch = n.child[c];
+            if (ch.leaf) {
+              for (uint32_t k = w.leaf_begin[ch.index]; k < w.leaf_begin[ch.index + 1]; ++k)
+                EXPECT_TRUE(ch.box.contains(s.mesh.triangle_bounds(w.leaf_prims[k])));
+            } else {
+              parents[ch.index]++;
+              for (int g = 0; g < w.nodes[ch.index].count; ++g)
+                EXPECT_TRUE(ch.box.contains(w.nodes[ch.index].child[g].box));
+            }
+          }
+        }
+        for (size_t i = 1; i < parents.size(); ++i) EXPECT_EQ(parents[i], 1) << "wide node " << i;
+        // The DP is optimal for its cost model: its value matches its tree,
+        // and it beats opening the largest child greedily.
+        EXPECT_NEAR(collapse_cost(w, o), w.dp_cost, 1e-3 * w.dp_cost);
+        EXPECT_LE(w.dp_cost, greedy_cost(tree, o, subtree_ref_counts(tree.nodes)) * (1 + 1e-5));
+      }
+    }
+  }
+}
+
+TEST(BvhCollapse, WideLayoutNodesAndBlocks) {
+  const Scene s = make_triangle_soup(2000, 43);
+  const BinaryBvh tree = build_with("binned", s.mesh);
+  CollapseOptions o;
+  o.width = 8;
+  o.block_width = 8;
+  o.max_leaf = 16;
+  const WideTree w = collapse_to_wide(tree, o);
+  const WideBvh<8, 8> bvh = make_wide_bvh<8, 8>(w, s.mesh);
+  std::vector<int> seen(s.mesh.num_triangles(), 0);
+  for (const WideNode<8>& n : bvh.nodes) {
+    for (int c = 0; c < 8; ++c) {
+      const uint32_t ref = n.child[c];
+      if (!wide_ref::is_leaf(ref)) {
+        const WideNode<8>& ch = bvh.nodes[ref];
+        for (int g = 0; g < 8; ++g)
+          if (!(wide_ref::is_leaf(ch.child[g]) && wide_ref::leaf_blocks(ch.child[g]) == 0)) {
+            EXPECT_TRUE(n.child_box(c).contains(ch.child_box(g)));
+          }
+        continue;
+      }
+      if (wide_ref::leaf_blocks(ref) == 0) {
+        EXPECT_TRUE(n.child_box(c).is_empty()) << "unused slots have empty boxes";
+        continue;
+      }
+      for (uint32_t b = 0; b < wide_ref::leaf_blocks(ref); ++b) {
+        const TriangleBlock<8>& blk = bvh.blocks[wide_ref::leaf_first(ref) + b];
+        for (int lane = 0; lane < blk.count(); ++lane) {
+          seen[blk.prim[lane]]++;
+          EXPECT_TRUE(n.child_box(c).contains(s.mesh.triangle_bounds(blk.prim[lane])));
+        }
+      }
+    }
+  }
+  for (int c : seen) EXPECT_EQ(c, 1);
+}
+
+TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
+  // Long thin triangles across a box: the case spatial splits exist for.
+  const Scene s = make_triangle_soup(300, 47, 3.0f);
+  const Prims p = prims_of(s.mesh);
+  SbvhOptions so;
+  so.alpha = 0.0f;
+  so.split_budget = 1.0f;
+  so.spatial_bins = 16;
+  SbvhStats st;
+  const BinaryBvh t = build_sbvh(p.boxes, p.centroids, TriangleSplitter(s.mesh), so, &st);
+  EXPECT_GT(st.spatial_splits, 10u) << "the scene must exercise spatial splits";
+  EXPECT_GT(t.prim_ids.size(), s.mesh.num_triangles());
+  EXPECT_LE(t.prim_ids.size(), 2 * s.mesh.num_triangles()) << "split budget";
+  check_binary_tree(t, s.mesh, true);
+  // Every point of every triangle lies in the box of one of its references.
+  std::map<uint32_t, std::vector<Aabb>> boxes_of;
+  for (const Bvh2Node& n : t.nodes)
+    if (is_leaf(n))
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) boxes_of[t.prim_ids[k]].push_back(n.bounds());
+  Pcg32 rng(5, 7);
+  size_t uncovered = 0;
+  for (uint32_t prim = 0; prim < s.mesh.num_triangles(); ++prim) {
+    const Vec3f a = s.mesh.vertex(prim, 0), b = s.mesh.vertex(prim, 1), c = s.mesh.vertex(prim, 2);
+    for (int i = 0; i < 200; ++i) {
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+      if (i < 3) u = i == 1, v = i == 2;  // the vertices themselves
+      // Points are rounded in float; allow that rounding.
+      const Vec3f q = (1.0f - u - v) * a + u * b + v * c;
+      const float tol = 4e-7f * q.cwiseAbs().maxCoeff() + 1e-30f;
+      bool covered = false;
+      for (const Aabb& box : boxes_of[prim])
+        covered |= (q.array() >= box.lo.array() - tol).all() && (q.array() <= box.hi.array() + tol).all();
+      uncovered += !covered;
+    }
+  }
+  EXPECT_EQ(uncovered, 0u);
+}
+
+TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {
+  const Scene s = make_triangle_soup(200, 53, 2.0f);
+  const TriangleSplitter split(s.mesh);
+  Pcg32 rng(11, 3);
+  size_t crossings = 0;
+  for (uint32_t prim = 0; prim < s.mesh.num_triangles(); ++prim) {
+    const Aabb box = s.mesh.triangle_bounds(prim);
+    for (int axis = 0; axis < 3; ++axis) {
+      const float pos = box.lo[axis] + rng.uniform() * (box.hi[axis] - box.lo[axis]);
+      Aabb l, r;
+      split.split(prim, box, axis, pos, true, l, r);
+      EXPECT_TRUE(box.contains(l) && box.contains(r));
+      // Each edge crossing the plane, in double precision, lies in both boxes.
+      for (int e = 0; e < 3; ++e) {
+        const Vec3f p = s.mesh.vertex(prim, e), q = s.mesh.vertex(prim, (e + 1) % 3);
+        if (!((p[axis] < pos && q[axis] > pos) || (p[axis] > pos && q[axis] < pos))) continue;
+        ++crossings;
+        const double t = (static_cast<double>(pos) - p[axis]) / (static_cast<double>(q[axis]) - p[axis]);
+        for (int a = 0; a < 3; ++a) {
+          const double x = a == axis ? pos : p[a] + t * (static_cast<double>(q[a]) - p[a]);
+          EXPECT_LE(l.lo[a], x);
+          EXPECT_GE(l.hi[a], x);
+          EXPECT_LE(r.lo[a], x);
+          EXPECT_GE(r.hi[a], x);
+        }
+      }
+      for (int c = 0; c < 3; ++c) {
+        const Vec3f v = s.mesh.vertex(prim, c);
+        if (v[axis] <= pos) {
+          EXPECT_TRUE(l.contains(v));
+        }
+        if (v[axis] >= pos) {
+          EXPECT_TRUE(r.contains(v));
+        }
+      }
+    }
+  }
+  EXPECT_GT(crossings, 100u);
+}
+
+TEST(BvhLbvh, CoincidentCentroidsGiveABalancedTree) {
+  // 4096 triangles with the very same box centre (rotated copies), and
+  // Morton codes that all collide: the index breaks the ties.
+  TriangleMesh m;
+  const int n = 4096;
+  for (int i = 0; i < n; ++i) {
+    const float a = 6.2831853f * static_cast<float>(i) / n;
+    const uint32_t base = static_cast<uint32_t>(m.vertices.size());
+    m.vertices.push_back(Vec3f(std::cos(a), std::sin(a), 0.0f));
+    m.vertices.push_back(Vec3f(-std::cos(a), -std::sin(a), 0.0f));
+    m.vertices.push_back(Vec3f(0.0f, 0.0f, 1.0f + 0.0001f * static_cast<float>(i % 7)));
+    m.vertices.push_back(Vec3f(0.0f, 0.0f, -1.0f - 0.0001f * static_cast<float>(i % 7)));
+    m.triangles.push_back({base, base + 1, base + 2});
+    m.triangles.push_back({base + 1, base, base + 3});
+  }
+  const Prims p = prims_of(m);
+  const BinaryBvh t = build_lbvh(p.boxes, p.centroids);
+  check_binary_tree(t, m, false);
+  const TreeShape shape = measure_tree(t.nodes);
+  EXPECT_LE(shape.max_depth, 2 + static_cast<int>(std::ceil(std::log2(2.0 * n)))) << "ties split by index";
+  // And the accelerator built on it answers like brute force.
+  auto a = make_accelerator("bvh:builder=lbvh");
+  auto brute = make_accelerator("brute");
+  a->build(m);
+  brute->build(m);
+  Pcg32 rng(3, 9);
+  for (int i = 0; i < 300; ++i) {
+    const Ray r(Vec3f(2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f, 3.0f), Vec3f(0.01f, 0.02f, -1.0f));
+    const Hit x = a->intersect1(r), y = brute->intersect1(r);
+    ASSERT_EQ(x.valid(), y.valid());
+    if (x.valid()) {
+      EXPECT_EQ(x.t, y.t);
+    }
+  }
+}
+
+TEST(BvhLbvh, MortonSpreadPlacesBitsEveryThird) {
+  EXPECT_EQ(morton_spread21(0), 0u);
+  EXPECT_EQ(morton_spread21(1), 1u);
+  EXPECT_EQ(morton_spread21(2), 8u);
+  EXPECT_EQ(morton_spread21(0x1FFFFF), 0x1249249249249249ull);
+  for (int bit = 0; bit < 21; ++bit) EXPECT_EQ(morton_spread21(1u << bit), 1ull << (3 * bit));
+  EXPECT_EQ(morton_spread21(1u << 21), 0u) << "only 21 bits are used";
+}
+
+TEST(BvhReinsertion, LowersSahCostAndRespectsTheTimeBudget) {
+  Scene s = make_triangle_soup(1, 1);
+  s.mesh = make_uv_sphere(96, 48);  // a surface: LBVH leaves room to improve
+  const Prims p = prims_of(s.mesh);
+  const BinaryBvh base = build_lbvh(p.boxes, p.centroids);
+  ReinsertionStats st;
+  const BinaryBvh opt = optimize_reinsertion(base, ReinsertionOptions{}, &st);
+  check_binary_tree(opt, s.mesh, false);
+  EXPECT_NEAR(st.sah_before, tree_sah_cost(base.nodes), 1e-3 * st.sah_before);
+  EXPECT_NEAR(st.sah_after, tree_sah_cost(opt.nodes), 1e-3 * st.sah_after);
+  EXPECT_LT(st.sah_after, 0.98 * st.sah_before);
+  EXPECT_GT(st.moves, 0u);
+  // No time, no change.
+  ReinsertionOptions none;
+  none.time_budget_ms = 0.0;
+  ReinsertionStats st0;
+  const BinaryBvh same = optimize_reinsertion(base, none, &st0);
+  EXPECT_EQ(st0.rounds, 0);
+  EXPECT_EQ(st0.moves, 0u);
+  EXPECT_NEAR(tree_sah_cost(same.nodes), st.sah_before, 1e-6 * st.sah_before);
+  // Reported by the accelerator.
+  auto a = make_accelerator("bvh:builder=lbvh,opt=reinsert");
+  const BuildStats bs = a->build(s.mesh);
+  ASSERT_TRUE(bs.extra.count("sah_before_opt") && bs.extra.count("sah_after_opt"));
+  EXPECT_LT(bs.extra.at("sah_after_opt"), bs.extra.at("sah_before_opt"));
+}
+
+// ---------------------------------------------------------------------------
+// Vectorised watertight test and traversal details
+
+template <int W>
+void expect_block_matches_scalar(uint64_t seed) {
+  Pcg32 rng(seed, 17);
+  // Triangles on an integer grid (shared edges, vertices hit exactly by
+  // axis-aligned rays: edge functions of exactly 0) and random ones.
+  std::vector<Vec3f> v;
+  for (int i = 0; i < 3 * W; ++i) {
+    if (i < 3 * W / 2) v.push_back(Vec3f(std::floor(4 * rng.uniform()), std::floor(4 * rng.uniform()), std::floor(2 * rng.uniform())));
+    else v.push_back(Vec3f(4 * rng.uniform(), 4 * rng.uniform(), 4 * rng.uniform() - 1));
+  }
+  v[0] = v[1];  // one degenerate triangle
+  TriangleBlock<W> blk;
+  std::vector<uint32_t> ids(W);
+  std::iota(ids.begin(), ids.end(), 0u);
+  fill_block<W>(blk, ids.data(), W, [&](uint32_t prim, int c) -> const Vec3f& { return v[3 * prim + c]; });
+  size_t hits = 0;
+  for (int k = 0; k < 3000; ++k) {
+    Ray r;
+    if (k % 3 == 0) {  // axis-aligned through grid points
+      const Vec3f target(std::floor(5 * rng.uniform()), std::floor(5 * rng.uniform()), 0.5f);
+      const int axis = static_cast<int>(rng.next() % 3);
+      Vec3f d = Vec3f::Zero();
+      d[axis] = rng.uniform() < 0.5f ? -1.0f : 1.0f;
+      r = Ray(target - 3.0f * d, d);
+    } else {
+      const Vec3f o(8 * rng.uniform() - 2, 8 * rng.uniform() - 2, 8 * rng.uniform() - 2);
+      const Vec3f t(4 * rng.uniform(), 4 * rng.uniform(), 2 * rng.uniform());
+      r = Ray(o, t - o, k % 5 == 0 ? 0.3f : 0.0f, k % 7 == 0 ? 0.8f : 100.0f);
+    }
+    const BlockRay<W> br(r);
+    BlockHits<W> bh;
+    const uint32_t mask = intersect_block<W>(blk, br, r.tmin, r.tmax, bh);
+    const WatertightRay w(r);
+    for (int lane = 0; lane < W; ++lane) {
+      float t = 0, u = 0, vv = 0;
+      const bool hit = intersect_watertight(w, v[3 * lane], v[3 * lane + 1], v[3 * lane + 2], r.tmin, r.tmax, t, u, vv);
+      ASSERT_EQ(hit, ((mask >> lane) & 1) != 0) << "W " << W << " ray " << k << " lane " << lane;
+      if (hit) {
+        ++hits;
+        EXPECT_EQ(t, bh.t[lane]);
+        EXPECT_EQ(u, bh.u[lane]);
+        EXPECT_EQ(vv, bh.v[lane]);
+      }
+    }
+  }
+  EXPECT_GT(hits, 300u);
+}
+
+TEST(BvhTriangleBlock, VectorTestEqualsScalarTestBitForBit) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    expect_block_matches_scalar<4>(seed);
+    expect_block_matches_scalar<8>(seed);
+    expect_block_matches_scalar<16>(seed);
+  }
+}
+
+TEST(BvhTriangleBlock, PaddingLanesRepeatTheFirstTriangle) {
+  std::vector<Vec3f> v = {Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1), Vec3f(0, 0, 2), Vec3f(1, 0, 2), Vec3f(0, 1, 2)};
+  TriangleBlock<8> blk;
+  const uint32_t ids[2] = {4, 9};
+  fill_block<8>(blk, ids, 2, [&](uint32_t prim, int c) -> const Vec3f& { return v[(prim == 4 ? 0 : 3) + c]; });
+  EXPECT_EQ(blk.count(), 2);
+  for (int lane = 2; lane < 8; ++lane) EXPECT_EQ(blk.prim[lane], 4u);
+}
+
+// Rays from outside aimed at shared edges and vertices of a closed sphere
+// must hit it, and rays from inside must never escape.
+size_t sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, size_t remove = SIZE_MAX) {
+  TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
+  const TriangleMesh full = sphere;
+  if (remove < sphere.num_triangles()) sphere.triangles.erase(sphere.triangles.begin() + remove);
+  auto accel = make_accelerator(spec);
+  accel->build(sphere);
+  Pcg32 rng(42, 3);
+  std::vector<Ray> batch;
+  for (size_t i = 0; i < rays; ++i) {
+    const size_t tri = rng.next() % full.num_triangles();
+    const int corner = static_cast<int>(rng.next() % 3);
+    const Vec3f& p = full.vertex(tri, corner);
+    const Vec3f& q = full.vertex(tri, (corner + 1) % 3);
+    const Vec3f target = (i % 2) ? p : Vec3f(p + rng.uniform() * (q - p));
+    const Vec3f radial = (target - center).normalized();
+    Vec3f w = test::random_direction(rng);
+    while (w.dot(radial) < 0.5f) w = test::random_direction(rng);
+    const Vec3f org = target + 2.0f * w;
+    batch.emplace_back(org, (target - org).normalized());
+    batch.emplace_back(center, test::random_direction(rng));
+  }
+  std::vector<Hit> hits(batch.size());
+  std::vector<uint8_t> occ(batch.size());
+  accel->intersect(batch, hits);
+  accel->occluded(batch, occ);
+  size_t leaks = 0;
+  for (size_t i = 0; i < batch.size(); ++i) leaks += !hits[i].valid() + !occ[i];
+  return leaks;
+}
+
+TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
+  for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
+                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,budget=1"}) {
+    EXPECT_EQ(sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
+    // Far from the origin the float spacing is 1/128 of the radius.
+    EXPECT_EQ(sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
+  }
+}
+
+TEST(BvhWatertightness, LeakCounterFindsAHole) {
+  EXPECT_GT(sphere_leaks("bvh", Vec3f::Zero(), 20000, 700), 0u);
+}
+
+TEST(BvhTraversal, SortingNetworkSortsDescending) {
+  // 0-1 principle: a comparator network sorts every input iff it sorts all 0/1 inputs.
+  for (int bits = 0; bits < 256; ++bits) {
+    uint64_t keys[8];
+    for (int i = 0; i < 8; ++i) keys[i] = ((bits >> i) & 1) ? 5 : 3;
+    std::vector<uint64_t> want(keys, keys + 8);
+    std::sort(want.rbegin(), want.rend());
+    sort8_keys_descending(keys, 8);
+    for (int i = 0; i < 8; ++i) ASSERT_EQ(keys[i], want[i]) << bits;
+  }
+  Pcg32 rng(1, 1);
+  for (int k = 0; k < 2000; ++k) {
+    const int n = 1 + static_cast<int>(rng.next() % 8);
+    uint64_t keys[8] = {};
+    for (int i = 0; i < n; ++i) keys[i] = child_key(rng.uniform() * 10.0f - 1.0f, rng.next());
+    std::vector<uint64_t> want(keys, keys + n);
+    std::sort(want.rbegin(), want.rend());
+    sort8_keys_descending(keys, n);
+    for (int i = 0; i < n; ++i) ASSERT_EQ(keys[i], want[i]);
+  }
+  // Keys order by distance, then leaves before inner nodes; refs survive.
+  EXPECT_LT(child_key(1.0f, 5), child_key(2.0f, 3));
+  EXPECT_LT(child_key(1.0f, wide_ref::leaf(7, 1)), child_key(1.0f, 3));
+  EXPECT_EQ(key_ref(child_key(3.5f, wide_ref::leaf(9, 2))), wide_ref::leaf(9, 2));
+  EXPECT_EQ(key_dist(child_key(3.5f, 12)), 3.5f);
+  EXPECT_EQ(key_dist(child_key(-2.0f, 12)), 0.0f) << "negative distances order as 0";
+}
+
+TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
+  // Axis-aligned slabs of triangles; rays start inside the scene, on box
+  // faces and parallel to faces (zero direction components).
+  TriangleMesh m;
+  for (int z = 0; z < 6; ++z) {
+    const uint32_t b = static_cast<uint32_t>(m.vertices.size());
+    m.vertices.push_back(Vec3f(0, 0, static_cast<float>(z)));
+    m.vertices.push_back(Vec3f(4, 0, static_cast<float>(z)));
+    m.vertices.push_back(Vec3f(4, 4, static_cast<float>(z)));
+    m.vertices.push_back(Vec3f(0, 4, static_cast<float>(z)));
+    m.triangles.push_back({b, b + 1, b + 2});
+    m.triangles.push_back({b, b + 2, b + 3});
+  }
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:block=4,leaf=1"}) {
+    auto a = make_accelerator(spec);
+    a->build(m);
+    for (float z0 : {0.0f, 0.5f, 2.0f, 5.0f}) {
+      const Hit up = a->intersect1(Ray(Vec3f(1, 3, z0), Vec3f(0, 0, 1), 0.25f));
+      ASSERT_TRUE(up.valid() || z0 == 5.0f) << spec << " z0 " << z0;
+      if (up.valid()) {
+        EXPECT_EQ(up.t, std::ceil(z0 + 0.25f) - z0) << spec;
+      }
+      EXPECT_FALSE(a->intersect1(Ray(Vec3f(1, 3, z0 + 0.5f), Vec3f(1, 0, 0))).valid()) << "parallel to the slabs";
+      EXPECT_EQ(a->occluded1(Ray(Vec3f(1, 3, 0.5f), Vec3f(0, 0, 1), 0, 0.4f)), false);
+      EXPECT_EQ(a->occluded1(Ray(Vec3f(1, 3, 0.5f), Vec3f(0, 0, 1), 0, 0.5f)), true) << "tmax exactly at the hit";
+    }
+    // On the boundary face of the scene box, looking along it.
+    EXPECT_TRUE(a->intersect1(Ray(Vec3f(4, 2, -1), Vec3f(0, 0, 1))).valid()) << spec << " on the box face";
+    EXPECT_TRUE(a->intersect1(Ray(Vec3f(0, 0, -1), Vec3f(-0.0f, 0.0f, 1))).valid()) << spec << " corner, -0 dir";
+  }
+}
+
+}  // namespace
+}  // namespace raylab
