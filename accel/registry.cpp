@@ -5,6 +5,7 @@
 #include "accel/brute/brute_accel.h"
 #include "accel/bvh/bvh_accel.h"
 #include "accel/embree/embree_accel.h"
+#include "accel/grid/grid_accels.h"
 
 namespace raylab {
 
@@ -14,6 +15,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       embree_accelerator_info(),
       brute_accelerator_info(),
       bvh_accelerator_info(),
+      grid_accelerator_info(),
   };
   return registry;
 }
