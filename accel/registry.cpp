@@ -16,6 +16,8 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       brute_accelerator_info(),
       bvh_accelerator_info(),
       grid_accelerator_info(),
+      hashgrid_accelerator_info(),
+      grid2_accelerator_info(),
   };
   return registry;
 }

@@ -1,0 +1,148 @@
+#include "accel/grid/hash_grid.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_scan.h>
+#include <tbb/parallel_sort.h>
+
+#include "accel/grid/cell_overlap.h"
+#include "accel/grid/grid_stats.h"
+
+namespace raylab {
+
+namespace {
+
+constexpr size_t kTriangleGrain = 256;
+
+struct KeyRef {
+  uint64_t key;
+  uint32_t id;
+  bool operator<(const KeyRef& o) const { return key != o.key ? key < o.key : id < o.id; }
+};
+
+// Pass 1 and 2: per-triangle cell counts, then their exclusive prefix sum
+// (first[i] = first pair of triangle i; first[n] = total).
+std::vector<uint64_t> count_pairs(const DdaGrid& g, AssignMode mode, std::span<const GridTriangle> tris) {
+  const size_t n = tris.size();
+  std::vector<uint64_t> first(n + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      uint64_t c = 0;
+      for_each_assigned_cell(g, mode, tris[i].p0, tris[i].p1, tris[i].p2, [&](int32_t, int32_t, int32_t) { ++c; });
+      first[i] = c;
+    }
+  });
+  const uint64_t total = tbb::parallel_scan(
+      tbb::blocked_range<size_t>(0, n, 1 << 14), uint64_t{0},
+      [&](const tbb::blocked_range<size_t>& r, uint64_t sum, bool is_final) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const uint64_t c = first[i];
+          if (is_final) first[i] = sum;
+          sum += c;
+        }
+        return sum;
+      },
+      [](uint64_t a, uint64_t b) { return a + b; });
+  first[n] = total;
+  return first;
+}
+
+}  // namespace
+
+HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
+  HashGrid g;
+  const size_t n = mesh.num_triangles();
+  g.tris = copy_grid_triangles(mesh);
+  g.empty = n == 0;
+  if (g.empty) return g;
+
+  const Aabb bounds = mesh.bounds();
+  Vec3d lo, hi;
+  padded_grid_box(bounds, lo, hi);
+  const Vec3d extent = (bounds.hi - bounds.lo).cast<double>();
+  // No cap on cells from memory (empty cells cost nothing); linear keys stay
+  // below 2^60 through the per-axis limit.
+  const uint64_t max_cells = uint64_t{1} << 60;
+  ChosenResolution chosen = opt.res ? cap_resolution(*opt.res, max_cells)
+                                    : choose_resolution(extent, static_cast<double>(n), opt.density, max_cells);
+  const uint64_t budget = opt.budget_bytes();
+
+  std::vector<uint64_t> first;
+  while (true) {
+    g.dda = make_dda_grid(lo, hi, chosen.res);
+    first = count_pairs(g.dda, opt.assign, g.tris);
+    const uint64_t total = first[n];
+    if (total * (sizeof(KeyRef) + sizeof(uint32_t)) <= budget && total <= UINT32_MAX) break;
+    if (total_cells(chosen.res) == 1)
+      throw std::runtime_error(fmt::format(
+          "hashgrid: a memory budget of {} MiB cannot hold the references of {} triangles", opt.budget_mib, n));
+    const ChosenResolution smaller =
+        opt.res ? cap_resolution(chosen.res, total_cells(chosen.res) / 2)
+                : choose_resolution(extent, static_cast<double>(n), chosen.lambda / 2, max_cells);
+    chosen.res = smaller.res;
+    chosen.lambda = smaller.lambda;
+    chosen.capped = true;
+  }
+  if (chosen.capped) {
+    const std::string requested = opt.res ? "res=" + format_grid_resolution(*opt.res) : fmt::format("density={}", opt.density);
+    const std::string used = opt.res ? "res=" + format_grid_resolution(chosen.res)
+                                     : fmt::format("density={:.4g} (res={})", chosen.lambda, format_grid_resolution(chosen.res));
+    warn_budget_capped("hashgrid", requested, used, opt.budget_mib);
+  }
+
+  // Pass 3: fill the (key, id) pairs, then sort them by cell.
+  const uint64_t total = first[n];
+  std::vector<KeyRef> pairs(total);
+  const DdaGrid& dda = g.dda;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      uint64_t slot = first[i];
+      for_each_assigned_cell(dda, opt.assign, g.tris[i].p0, g.tris[i].p1, g.tris[i].p2,
+                             [&](int32_t x, int32_t y, int32_t z) {
+                               pairs[slot++] = KeyRef{static_cast<uint64_t>(dda.index(x, y, z)), static_cast<uint32_t>(i)};
+                             });
+    }
+  });
+  std::vector<uint64_t>().swap(first);
+  tbb::parallel_sort(pairs.begin(), pairs.end());
+
+  // Runs of equal keys -> occupied cells.
+  size_t occupied = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) occupied += (i == 0 || pairs[i].key != pairs[i - 1].key);
+  g.table = CellHashTable(occupied);
+  g.refs.resize(total);
+  uint64_t probe_sum = 0;
+  uint32_t probe_max = 0, max_per_cell = 0;
+  for (size_t i = 0; i < pairs.size();) {
+    size_t j = i;
+    while (j < pairs.size() && pairs[j].key == pairs[i].key) {
+      g.refs[j] = pairs[j].id;
+      ++j;
+    }
+    const uint32_t count = static_cast<uint32_t>(j - i);
+    const uint32_t probes = g.table.insert(pairs[i].key, static_cast<uint32_t>(i), count);
+    probe_sum += probes;
+    probe_max = std::max(probe_max, probes);
+    max_per_cell = std::max(max_per_cell, count);
+    i = j;
+  }
+
+  add_occupancy_stats(stats, total_cells(chosen.res), occupied, total, max_per_cell, n);
+  add_resolution_stats(stats, chosen.res, opt.res ? 0.0 : chosen.lambda, opt.res ? 0.0 : opt.density);
+  stats.extra["budget_capped"] = chosen.capped ? 1.0 : 0.0;
+  stats.extra["hash_capacity"] = static_cast<double>(g.table.capacity());
+  stats.extra["hash_load"] = static_cast<double>(occupied) / static_cast<double>(g.table.capacity());
+  stats.extra["hash_mean_probes"] = occupied ? static_cast<double>(probe_sum) / static_cast<double>(occupied) : 0.0;
+  stats.extra["hash_max_probes"] = probe_max;
+  stats.max_depth = 1;
+  stats.avg_depth = 1.0;
+  stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(GridTriangle) +
+                sizeof(HashGrid);
+  return g;
+}
+
+}  // namespace raylab
