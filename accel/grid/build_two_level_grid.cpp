@@ -1,6 +1,7 @@
 #include "accel/grid/two_level_grid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
 #include <stdexcept>
 
@@ -15,32 +16,39 @@ namespace raylab {
 
 namespace {
 
+// Sub-grids whose triangles are large compared with their cells (stacked
+// copies, a few big triangles) would list every triangle in most cells. A
+// sub-grid is coarsened until its bounding-box estimate of references is at
+// most this many per triangle and unit of density.
+constexpr double kMaxBboxRefsPerTriangle = 16.0;
+
 struct SubGridPlan {
   uint32_t top_cell = 0;
+  std::span<const uint32_t> ids;  // the top cell's triangles
   Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();  // padded box of the sub-grid
   Vec3d extent = Vec3d::Zero();                  // unpadded extent, for the resolution rule
-  GridRes res{1, 1, 1};
+  SubGrid sub{};
 };
 
 // The part of top cell `cell` that holds its triangles: their bounds
 // clipped to the cell (enlarged by the top grid's assignment margin, as the
 // assignment was), then padded like a grid box.
-SubGridPlan plan_subgrid(const DdaGrid& top, uint32_t cell, std::span<const uint32_t> ids,
-                         std::span<const GridTriangle> tris) {
-  SubGridPlan p;
-  p.top_cell = cell;
-  const int64_t c[3] = {cell % top.res[0], (cell / top.res[0]) % top.res[1], cell / (static_cast<int64_t>(top.res[0]) * top.res[1])};
+void plan_box(const DdaGrid& top, std::span<const GridTriangle> tris, SubGridPlan& p) {
+  const int64_t cell = p.top_cell;
+  const int64_t c[3] = {cell % top.res[0], (cell / top.res[0]) % top.res[1],
+                        cell / (static_cast<int64_t>(top.res[0]) * top.res[1])};
+  const Vec3d margin = assignment_margin(top);
   Vec3d blo = Vec3d::Constant(std::numeric_limits<double>::infinity());
   Vec3d bhi = -blo;
-  for (const uint32_t id : ids) {
+  for (const uint32_t id : p.ids) {
     for (const Vec3f* v : {&tris[id].p0, &tris[id].p1, &tris[id].p2}) {
       blo = blo.cwiseMin(v->cast<double>());
       bhi = bhi.cwiseMax(v->cast<double>());
     }
   }
   for (int a = 0; a < 3; ++a) {
-    blo[a] = std::max(blo[a], top.boundary(a, c[a]) - top.margin[a]);
-    bhi[a] = std::min(bhi[a], top.boundary(a, c[a] + 1) + top.margin[a]);
+    blo[a] = std::max(blo[a], top.boundary(a, c[a]) - margin[a]);
+    bhi[a] = std::min(bhi[a], top.boundary(a, c[a] + 1) + margin[a]);
     if (bhi[a] < blo[a]) bhi[a] = blo[a];  // only possible through rounding
   }
   p.extent = bhi - blo;
@@ -50,13 +58,50 @@ SubGridPlan plan_subgrid(const DdaGrid& top, uint32_t cell, std::span<const uint
   const double pad = std::max({1e-5 * p.extent.maxCoeff(), 1e-7 * largest_top_cell, 1e-6 * magnitude, 1e-30});
   p.lo = blo.array() - pad;
   p.hi = bhi.array() + pad;
-  return p;
 }
 
-struct Attempt {
-  bool ok = false;
-  uint64_t sub_cells = 0;
-};
+void set_resolution(SubGridPlan& p, const GridRes& res) {
+  for (int a = 0; a < 3; ++a) {
+    p.sub.lo[a] = p.lo[a];
+    p.sub.cell[a] = (p.hi[a] - p.lo[a]) / res[a];
+    p.sub.res[a] = res[a];
+  }
+}
+
+// Cells covered by the triangles' bounding boxes (an upper bound of the
+// references the sub-grid will hold).
+double bbox_refs(const SubGridPlan& p, std::span<const GridTriangle> tris) {
+  const DdaGrid g = p.sub.dda();
+  double sum = 0.0;
+  for (const uint32_t id : p.ids) {
+    const GridTriangle& t = tris[id];
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const int32_t lo = g.coord(a, std::min({t.p0[a], t.p1[a], t.p2[a]}));
+      const int32_t hi = g.coord(a, std::max({t.p0[a], t.p1[a], t.p2[a]}));
+      cells *= hi - lo + 1;
+    }
+    sum += cells;
+  }
+  return sum;
+}
+
+// The n^(1/3) rule for the top cell's triangles, coarsened when they are
+// large compared with the cells.
+void size_subgrid(SubGridPlan& p, double lambda, std::span<const GridTriangle> tris) {
+  const double n = static_cast<double>(p.ids.size());
+  const double limit = kMaxBboxRefsPerTriangle * std::max(1.0, lambda) * n;
+  for (double l = lambda;; l *= 0.5) {
+    const GridRes res = resolution_by_density(p.extent, n, l);
+    set_resolution(p, res);
+    if (total_cells(res) == 1 || bbox_refs(p, tris) <= limit) return;
+  }
+}
+
+std::runtime_error budget_error(const GridOptions& opt, size_t n) {
+  return std::runtime_error(
+      fmt::format("grid2: a memory budget of {} MiB cannot hold the references of {} triangles", opt.budget_mib, n));
+}
 
 }  // namespace
 
@@ -75,81 +120,70 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
   std::vector<uint32_t> all_ids(n);
   std::iota(all_ids.begin(), all_ids.end(), 0u);
 
-  // Top level: at most 1/8 of the budget for its cells and its (temporary)
-  // references.
-  const uint64_t top_limit = std::max<uint64_t>(1, budget / 8 / sizeof(uint32_t));
-  ChosenResolution top = choose_resolution(extent, static_cast<double>(n), opt.top_density, top_limit);
+  // Budget: the top cells (4 bytes each) get at most 1/8 of it; the top
+  // level's references, which live only during the build, at most half;
+  // the final structure (top cells, sub-grid records, sub-grid cells and
+  // references) all of it.
+  const uint64_t top_cell_limit = std::max<uint64_t>(1, budget / 8 / sizeof(uint32_t));
+  const uint64_t top_ref_limit = budget / 2 / sizeof(uint32_t);
+  ChosenResolution top = choose_resolution(extent, static_cast<double>(n), opt.top_density, top_cell_limit);
   CellLists top_lists;
   while (true) {
     g.top = make_dda_grid(lo, hi, top.res);
-    if (build_cell_lists(g.top, opt.assign, g.tris, all_ids, top_limit, top_lists)) break;
-    if (total_cells(top.res) == 1)
-      throw std::runtime_error(fmt::format("grid2: a memory budget of {} MiB cannot hold the references of {} triangles",
-                                           opt.budget_mib, n));
-    top = choose_resolution(extent, static_cast<double>(n), top.lambda / 2, top_limit);
+    if (build_cell_lists(g.top, opt.assign, g.tris, all_ids, top_ref_limit, top_lists)) break;
+    if (total_cells(top.res) == 1) throw budget_error(opt, n);
+    top = choose_resolution(extent, static_cast<double>(n), top.lambda / 2, top_cell_limit);
     top.capped = true;
   }
   std::vector<uint32_t>().swap(all_ids);
 
-  // One sub-grid per non-empty top cell.
+  // One sub-grid per non-empty top cell, over the part of the cell its
+  // triangles occupy.
   std::vector<SubGridPlan> plans;
-  for (uint32_t c = 0; c + 1 < top_lists.offsets.size(); ++c)
-    if (top_lists.offsets[c + 1] != top_lists.offsets[c]) {
-      SubGridPlan p;
-      p.top_cell = c;
-      plans.push_back(p);
-    }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      const uint32_t c = plans[k].top_cell;
-      const std::span<const uint32_t> ids(top_lists.refs.data() + top_lists.offsets[c],
-                                          top_lists.offsets[c + 1] - top_lists.offsets[c]);
-      plans[k] = plan_subgrid(g.top, c, ids, g.tris);
-    }
+  for (uint32_t c = 0; c + 1 < top_lists.offsets.size(); ++c) {
+    const uint32_t b = top_lists.offsets[c], e = top_lists.offsets[c + 1];
+    if (b == e) continue;
+    SubGridPlan p;
+    p.top_cell = c;
+    p.ids = std::span<const uint32_t>(top_lists.refs.data() + b, e - b);
+    plans.push_back(p);
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) plan_box(g.top, g.tris, plans[k]);
   });
 
-  // Sub-grids: their offsets may take half of the budget, their references
-  // what is left; otherwise the sub-grid density is lowered and retried.
   const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(SubGrid);
-  const uint64_t sub_cell_limit = std::max<uint64_t>(1, budget / 2 / sizeof(uint32_t));
+  if (top_bytes >= budget) throw budget_error(opt, n);
   double lambda = opt.density;
   bool sub_capped = false;
   std::vector<CellLists> lists(plans.size());
   while (true) {
-    uint64_t sub_cells = 0;
-    for (auto& p : plans) {
-      const uint32_t c = p.top_cell;
-      const double count = top_lists.offsets[c + 1] - top_lists.offsets[c];
-      p.res = resolution_by_density(p.extent, count, lambda);
-      sub_cells += total_cells(p.res) + 1;
-    }
-    if (sub_cells > sub_cell_limit) {
-      lambda *= std::min(0.5, static_cast<double>(sub_cell_limit) / static_cast<double>(sub_cells));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) size_subgrid(plans[k], lambda, g.tris);
+    });
+    uint64_t sub_offsets = 0;
+    for (const auto& p : plans) sub_offsets += p.sub.dda().cells() + 1;
+    const uint64_t fixed = top_bytes + sub_offsets * sizeof(uint32_t);
+    if (fixed >= budget) {
+      // Cells alone exceed the budget: scale the density by the excess.
+      if (lambda < 1e-9) throw budget_error(opt, n);
+      lambda *= std::min(0.5, static_cast<double>(budget - top_bytes) / static_cast<double>(sub_offsets * sizeof(uint32_t)));
       sub_capped = true;
       continue;
     }
-    const uint64_t left = budget > top_bytes + sub_cells * sizeof(uint32_t)
-                              ? (budget - top_bytes - sub_cells * sizeof(uint32_t)) / sizeof(uint32_t)
-                              : 0;
+    const uint64_t ref_limit = (budget - fixed) / sizeof(uint32_t);
     std::atomic<uint64_t> refs{0};
     std::atomic<bool> over{false};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         if (over.load(std::memory_order_relaxed)) return;
-        const SubGridPlan& p = plans[k];
-        const uint32_t c = p.top_cell;
-        const std::span<const uint32_t> ids(top_lists.refs.data() + top_lists.offsets[c],
-                                            top_lists.offsets[c + 1] - top_lists.offsets[c]);
-        const DdaGrid sub = make_dda_grid(p.lo, p.hi, p.res);
-        if (!build_cell_lists(sub, opt.assign, g.tris, ids, left, lists[k]) ||
-            refs.fetch_add(lists[k].refs.size()) + lists[k].refs.size() > left)
+        if (!build_cell_lists(plans[k].sub.dda(), opt.assign, g.tris, plans[k].ids, ref_limit, lists[k]) ||
+            refs.fetch_add(lists[k].refs.size()) + lists[k].refs.size() > ref_limit)
           over = true;
       }
     });
     if (!over) break;
-    if (lambda < 1e-9)
-      throw std::runtime_error(fmt::format("grid2: a memory budget of {} MiB cannot hold the references of {} triangles",
-                                           opt.budget_mib, n));
+    if (lambda < 1e-9) throw budget_error(opt, n);
     lambda /= 2;
     sub_capped = true;
     for (auto& l : lists) l = CellLists{};
@@ -168,7 +202,7 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
   std::vector<uint64_t> refs_base(plans.size());
   for (size_t k = 0; k < plans.size(); ++k) {
     g.top_cells[plans[k].top_cell] = static_cast<uint32_t>(k);
-    g.subgrids[k].dda = make_dda_grid(plans[k].lo, plans[k].hi, plans[k].res);
+    g.subgrids[k] = plans[k].sub;
     g.subgrids[k].offsets_base = static_cast<uint32_t>(offsets_total);
     refs_base[k] = refs_total;
     offsets_total += lists[k].offsets.size();
@@ -188,18 +222,18 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
     }
   });
 
-  // Statistics over the sub-grids' cells.
+  // Statistics: cells of both levels; occupancy of the second level, where
+  // the triangles are.
   uint64_t sub_cells = 0, nonempty = 0;
   uint32_t max_per_cell = 0;
   for (const SubGrid& s : g.subgrids) {
-    const uint64_t cells = s.dda.cells();
+    const uint64_t cells = total_cells(GridRes{s.res[0], s.res[1], s.res[2]});
     const CellOccupancy occ = measure_occupancy(std::span<const uint32_t>(g.offsets.data() + s.offsets_base, cells + 1));
     sub_cells += cells;
     nonempty += occ.nonempty;
     max_per_cell = std::max(max_per_cell, occ.max_per_cell);
   }
   add_occupancy_stats(stats, total_cells(top.res) + sub_cells, nonempty, refs_total, max_per_cell, n);
-  // Empty fraction and cells of the second level, where the triangles are.
   stats.extra["empty_fraction"] = sub_cells ? 1.0 - static_cast<double>(nonempty) / static_cast<double>(sub_cells) : 0.0;
   stats.extra["top_cells"] = static_cast<double>(total_cells(top.res));
   stats.extra["top_res_x"] = top.res[0];

@@ -4,9 +4,12 @@
 // resolution). Keys are linear cell indices x + rx*(y + ry*z) (< 2^60),
 // spread by the 64-bit finaliser of MurmurHash3 (Appleby), so neighbouring
 // cells land in unrelated slots. Open addressing with linear probing over
-// one flat array of 16-byte slots, load factor at most 1/2; the full key is
-// stored and compared, so a cell is never confused with another.
-#include <bit>
+// one flat array of 16-byte slots, twice as many slots as cells (load factor
+// 1/2, so 32 bytes per occupied cell); the hash is mapped onto the slots by
+// Lemire's multiply-shift range reduction, so the capacity need not be a
+// power of two. The full key is stored and compared, so a cell is never
+// confused with another.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -32,19 +35,15 @@ class CellHashTable {
  public:
   static constexpr uint64_t kEmptyKey = ~uint64_t{0};
 
-  // Table for `cells` occupied cells: capacity the next power of two >= 2*cells.
-  explicit CellHashTable(size_t cells = 0) {
-    const size_t cap = std::bit_ceil(std::max<size_t>(2 * cells, 2));
-    slots_.assign(cap, CellSlot{kEmptyKey, 0, 0});
-    mask_ = cap - 1;
-  }
+  // Table for `cells` occupied cells (2 * cells slots, at least 2).
+  explicit CellHashTable(size_t cells = 0) : slots_(std::max<size_t>(2 * cells, 2), CellSlot{kEmptyKey, 0, 0}) {}
 
   // Inserts a key not yet present; returns the number of probes it took.
   uint32_t insert(uint64_t key, uint32_t begin, uint32_t count) {
-    uint64_t h = mix_cell_key(key) & mask_;
+    size_t h = home(key);
     uint32_t probes = 1;
     while (slots_[h].key != kEmptyKey) {
-      h = (h + 1) & mask_;
+      h = next(h);
       ++probes;
     }
     slots_[h] = CellSlot{key, begin, count};
@@ -53,12 +52,12 @@ class CellHashTable {
 
   // The cell's slot, or nullptr when the cell is empty (not stored).
   const CellSlot* find(uint64_t key) const {
-    uint64_t h = mix_cell_key(key) & mask_;
+    size_t h = home(key);
     while (true) {
       const CellSlot& s = slots_[h];
       if (s.key == key) return &s;
       if (s.key == kEmptyKey) return nullptr;
-      h = (h + 1) & mask_;
+      h = next(h);
     }
   }
 
@@ -66,8 +65,12 @@ class CellHashTable {
   size_t bytes() const { return slots_.capacity() * sizeof(CellSlot); }
 
  private:
+  size_t home(uint64_t key) const {
+    return static_cast<size_t>((static_cast<unsigned __int128>(mix_cell_key(key)) * slots_.size()) >> 64);
+  }
+  size_t next(size_t h) const { return h + 1 == slots_.size() ? 0 : h + 1; }
+
   std::vector<CellSlot> slots_;
-  uint64_t mask_ = 1;
 };
 
 }  // namespace raylab

@@ -30,16 +30,17 @@ template <typename F>
 inline void for_each_assigned_cell(const DdaGrid& g, AssignMode mode, const Vec3f& p0, const Vec3f& p1,
                                    const Vec3f& p2, F&& f) {
   const Vec3d v0 = p0.cast<double>(), v1 = p1.cast<double>(), v2 = p2.cast<double>();
+  const Vec3d margin = assignment_margin(g);
   int32_t lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    const double mn = std::min({v0[a], v1[a], v2[a]}) - g.margin[a];
-    const double mx = std::max({v0[a], v1[a], v2[a]}) + g.margin[a];
+    const double mn = std::min({v0[a], v1[a], v2[a]}) - margin[a];
+    const double mx = std::max({v0[a], v1[a], v2[a]}) + margin[a];
     if (mx < g.lo[a] || mn > g.hi[a]) return;  // outside this grid
     lo[a] = g.coord(a, mn);
     hi[a] = g.coord(a, mx);
   }
-  auto cell_lo = [&](int a, int32_t c) { return g.boundary(a, c) - g.margin[a]; };
-  auto cell_hi = [&](int a, int32_t c) { return g.boundary(a, c + 1) + g.margin[a]; };
+  auto cell_lo = [&](int a, int32_t c) { return g.boundary(a, c) - margin[a]; };
+  auto cell_hi = [&](int a, int32_t c) { return g.boundary(a, c + 1) + margin[a]; };
 
   if (mode == AssignMode::Bbox) {
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
@@ -72,7 +73,7 @@ inline void for_each_assigned_cell(const DdaGrid& g, AssignMode mode, const Vec3
             mx = std::max(mx, xd);
           }
         // Slack for the rounding of this estimate; the SAT decides exactly.
-        const double slack = 1e-9 * (std::fabs(mn) + std::fabs(mx)) + g.margin[d];
+        const double slack = 1e-9 * (std::fabs(mn) + std::fabs(mx)) + margin[d];
         d0 = std::max(d0, g.coord(d, mn - slack));
         d1 = std::min(d1, g.coord(d, mx + slack));
       }

@@ -6,9 +6,9 @@
 // (boundary - org) / dir, never by accumulating increments, and in double
 // the rounding of those distances (~1e-16 relative) is far below anything a
 // float triangle test can resolve. The builders enlarge every cell by a
-// margin (see `margin`) that covers both this and the fuzz of the float
-// watertight test, so a triangle whose hit lies within rounding of a cell is
-// always listed in that cell.
+// margin (see assignment_margin) that covers both this and the fuzz of the
+// float watertight test, so a triangle whose hit lies within rounding of a
+// cell is always listed in that cell.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -25,8 +25,6 @@ struct DdaGrid {
   double inv_cell[3] = {1, 1, 1};
   int32_t res[3] = {1, 1, 1};
   int64_t stride[3] = {1, 1, 1};  // linear cell index = x*stride[0] + y*stride[1] + z*stride[2]
-  // Enlargement of every cell when triangles are assigned (build time only).
-  double margin[3] = {0, 0, 0};
 
   uint64_t cells() const { return static_cast<uint64_t>(res[0]) * res[1] * res[2]; }
 
@@ -40,29 +38,42 @@ struct DdaGrid {
   int64_t index(int32_t x, int32_t y, int32_t z) const { return x * stride[0] + y * stride[1] + z * stride[2]; }
 };
 
-// Relative enlargement of cells during assignment: 1/1000 of a cell side,
-// plus 16 float ulps of the largest coordinate (the watertight test works on
-// float coordinates relative to the ray origin).
-inline constexpr double kCellMarginRelative = 1e-3;
-inline constexpr double kCellMarginUlps = 16.0 * 0x1p-23;
-
-// A grid over [lo, hi] (hi > lo on every axis) with the given resolution.
-inline DdaGrid make_dda_grid(const Vec3d& lo, const Vec3d& hi, const GridRes& res) {
+// A grid with origin `lo`, cell sides `cell` (> 0) and resolution `res`.
+// Boundaries are lo + c * cell, so two grids made from the same lo and cell
+// (the builder's and the traversal's) agree exactly.
+inline DdaGrid make_dda_grid_from_cells(const double lo[3], const double cell[3], const int32_t res[3]) {
   DdaGrid g;
-  double magnitude = 0.0;
-  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(lo[a]), std::fabs(hi[a])});
   for (int a = 0; a < 3; ++a) {
     g.lo[a] = lo[a];
-    g.hi[a] = hi[a];
+    g.cell[a] = cell[a];
+    g.inv_cell[a] = 1.0 / cell[a];
     g.res[a] = res[a];
-    g.cell[a] = (hi[a] - lo[a]) / res[a];
-    g.inv_cell[a] = 1.0 / g.cell[a];
-    g.margin[a] = kCellMarginRelative * g.cell[a] + kCellMarginUlps * magnitude;
+    g.hi[a] = lo[a] + static_cast<double>(res[a]) * cell[a];
   }
   g.stride[0] = 1;
   g.stride[1] = res[0];
   g.stride[2] = static_cast<int64_t>(res[0]) * res[1];
   return g;
+}
+
+// A grid over [lo, hi] (hi > lo on every axis) with the given resolution.
+inline DdaGrid make_dda_grid(const Vec3d& lo, const Vec3d& hi, const GridRes& res) {
+  double cell[3];
+  for (int a = 0; a < 3; ++a) cell[a] = (hi[a] - lo[a]) / res[a];
+  return make_dda_grid_from_cells(lo.data(), cell, res.data());
+}
+
+// Enlargement of every cell when triangles are assigned to cells: 1/1000 of
+// a cell side, plus 16 float ulps of the grid's largest coordinate (the
+// watertight test works on float coordinates relative to the ray origin).
+inline constexpr double kCellMarginRelative = 1e-3;
+inline constexpr double kCellMarginUlps = 16.0 * 0x1p-23;
+
+inline Vec3d assignment_margin(const DdaGrid& g) {
+  double magnitude = 0.0;
+  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(g.lo[a]), std::fabs(g.hi[a])});
+  return Vec3d(kCellMarginRelative * g.cell[0], kCellMarginRelative * g.cell[1], kCellMarginRelative * g.cell[2])
+      .array() + kCellMarginUlps * magnitude;
 }
 
 // The box a grid is laid over: `bounds` padded on every side by 1e-5 of its

@@ -28,10 +28,17 @@ namespace raylab {
 
 inline constexpr uint32_t kNoSubGrid = 0xFFFFFFFFu;
 
+// 64 bytes per non-empty top cell: the DDA's derived figures (far corner,
+// reciprocals, strides) are recomputed when a ray enters the sub-grid.
 struct SubGrid {
-  DdaGrid dda;
-  uint32_t offsets_base = 0;  // this sub-grid's cell c has refs offsets[base + c] .. offsets[base + c + 1]
+  double lo[3];
+  double cell[3];
+  int32_t res[3];
+  uint32_t offsets_base;  // this sub-grid's cell c has refs offsets[base + c] .. offsets[base + c + 1]
+
+  DdaGrid dda() const { return make_dda_grid_from_cells(lo, cell, res); }
 };
+static_assert(sizeof(SubGrid) == 64);
 
 struct TwoLevelGrid {
   DdaGrid top;
