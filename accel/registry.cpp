@@ -60,10 +60,39 @@ std::vector<std::string> expand_accelerator_list(const std::string& list) {
     const AcceleratorInfo* info = find_info(spec.name);
     if (!info)
       throw SpecError(fmt::format("unknown accelerator '{}' (available: {}, or 'all')", spec.name, known_names()));
-    Params check(spec.name, info->params, spec.params);  // rejects unknown parameters now
+    // Construct once so unknown parameters and bad values fail now, before a
+    // possibly long scene load.
+    info->make(Params(spec.name, info->params, spec.params));
     out.push_back(spec.to_string());
   }
   if (out.empty()) throw SpecError("no accelerator given");
+  return out;
+}
+
+std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, const std::string& param,
+                                     const std::vector<std::string>& values) {
+  if (values.empty()) throw SpecError(fmt::format("sweep over '{}' has no values", param));
+  std::vector<std::string> out;
+  bool any = false;
+  for (const auto& text : specs) {
+    const Spec spec = Spec::parse(text);
+    const AcceleratorInfo* info = find_info(spec.name);
+    bool declared = false;
+    if (info)
+      for (const auto& p : info->params) declared |= (p.name == param);
+    if (!declared) {
+      out.push_back(text);
+      continue;
+    }
+    any = true;
+    for (const auto& v : values) {
+      Spec s = spec;
+      s.params[param] = v;
+      info->make(Params(s.name, info->params, s.params));  // validates the value
+      out.push_back(s.to_string());
+    }
+  }
+  if (!any) throw SpecError(fmt::format("no accelerator in the list has a parameter '{}'", param));
   return out;
 }
 

@@ -28,6 +28,12 @@ std::unique_ptr<Accelerator> make_accelerator(const std::string& spec);
 // Expands a comma list ("bvh,brute", "all") into single specs, checking each.
 std::vector<std::string> expand_accelerator_list(const std::string& list);
 
+// Sweep: every spec whose accelerator declares `param` is replaced by one
+// spec per value (param=value); other specs pass through unchanged.
+// Throws SpecError when no spec in the list has the parameter.
+std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, const std::string& param,
+                                     const std::vector<std::string>& values);
+
 // Human-readable list of accelerators and their parameters.
 std::string describe_accelerators();
 

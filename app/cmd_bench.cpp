@@ -16,6 +16,7 @@ namespace raylab::cli {
 Runner add_bench(CLI::App& app) {
   struct Opts {
     std::string scene = "cornell", accel = "embree,bvh", rays = "primary,random", threads = "1", size = "512x512", json;
+    std::vector<std::string> sweeps;
     size_t random_rays = 262144;
     int repeats = 5;
     uint64_t seed = 1;
@@ -31,11 +32,18 @@ Runner add_bench(CLI::App& app) {
   cmd->add_option("--random-rays", o->random_rays, "number of random rays")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
   cmd->add_option("--repeats", o->repeats, "timed repeats (median reported)")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
+  cmd->add_option("--sweep", o->sweeps, "PARAM=v1,v2,...: one run per value for every accelerator with PARAM (repeatable)");
   cmd->add_option("--json", o->json, "write records to this JSON file");
   cmd->add_flag("--quiet", o->quiet, "no progress line");
 
   return [o]() {
-    const auto specs = expand_accelerator_list(o->accel);
+    auto specs = expand_accelerator_list(o->accel);
+    for (const auto& sweep : o->sweeps) {
+      const auto eq = sweep.find('=');
+      if (eq == std::string::npos || eq == 0)
+        throw std::invalid_argument(fmt::format("--sweep {}: expected PARAM=v1,v2,...", sweep));
+      specs = apply_sweep(specs, sweep.substr(0, eq), parse_name_list(sweep.substr(eq + 1)));
+    }
     BenchOptions bo;
     bo.ray_sets = parse_name_list(o->rays);
     bo.threads = parse_int_list(o->threads, "thread count");

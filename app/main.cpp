@@ -24,6 +24,16 @@ int main(int argc, char** argv) {
   add(add_scenes, "scenes");
   add(add_accels, "accels");
 
+  std::string names;
+  bool known = false;
+  for (const auto& [sub, run] : runners) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+    known |= argc > 1 && sub->get_name() == argv[1];
+  }
+  if (argc > 1 && argv[1][0] != '-' && !known) {
+    std::fprintf(stderr, "raylab: error: unknown command '%s' (commands: %s)\n", argv[1], names.c_str());
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

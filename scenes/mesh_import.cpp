@@ -1,6 +1,17 @@
 #include "scenes/mesh_import.h"
+#include "scenes/mesh_precheck.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
+#include <cstring>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 
@@ -104,6 +115,149 @@ void apply_view_file(const fs::path& file, View& v) {
   }
 }
 
+// Imports with Assimp in this process. Throws SceneLoadError.
+void import_with_assimp(const std::string& path, Scene& s) {
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* ai =
+      importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType);
+  if (!ai) {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "unknown format or unreadable";
+    if (why.find("No meshes remaining") != std::string::npos) why = "contains no triangles (only points or lines)";
+    throw SceneLoadError(fmt::format("{}: cannot load mesh: {}", path, why));
+  }
+  if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE || !ai->mRootNode)
+    throw SceneLoadError(fmt::format("{}: file is incomplete (no mesh data)", path));
+  Merger m{ai, path, s, std::vector<int>(ai->mNumMaterials, -1)};
+  m.walk(ai->mRootNode, aiMatrix4x4(), 0);
+}
+
+// Assimp (5.2 as packaged by Debian) can crash, abort on an internal assert
+// or loop forever on truncated or malformed files. The import therefore runs
+// in a forked child that writes the merged mesh into an anonymous memory file;
+// a crash, abort or timeout of the child becomes a SceneLoadError here. The
+// price is one copy of the mesh through that file.
+struct ImportHeader {
+  uint64_t magic = 0x52594C4142494D50ull;  // "RYLABIMP"
+  uint64_t error_bytes = 0, vertices = 0, triangles = 0, materials = 0;
+};
+
+bool write_all(int fd, const void* data, size_t bytes) {
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::write(fd, p, bytes);
+    if (n <= 0) return false;
+    p += n;
+    bytes -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+bool read_all(int fd, void* data, size_t bytes) {
+  char* p = static_cast<char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::read(fd, p, bytes);
+    if (n <= 0) return false;
+    p += n;
+    bytes -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+[[noreturn]] void child_import(const std::string& path, int fd) {
+  // Assimp prints its internal assertion messages to stderr; the parent
+  // reports one clear error instead.
+  const int devnull = ::open("/dev/null", O_WRONLY);
+  if (devnull >= 0) ::dup2(devnull, STDERR_FILENO);
+  ImportHeader h;
+  Scene s;
+  std::string error;
+  try {
+    import_with_assimp(path, s);
+  } catch (const std::exception& e) {
+    error = e.what();
+  } catch (...) {
+    error = path + ": cannot load mesh: unknown error";
+  }
+  bool ok = true;
+  if (!error.empty()) {
+    h.error_bytes = error.size();
+    ok = write_all(fd, &h, sizeof h) && write_all(fd, error.data(), error.size());
+  } else {
+    h.vertices = s.mesh.vertices.size();
+    h.triangles = s.mesh.triangles.size();
+    h.materials = s.materials.size();
+    ok = write_all(fd, &h, sizeof h) && write_all(fd, s.mesh.vertices.data(), h.vertices * sizeof(Vec3f)) &&
+         write_all(fd, s.mesh.triangles.data(), h.triangles * sizeof(std::array<uint32_t, 3>)) &&
+         write_all(fd, s.material_ids.data(), h.triangles * sizeof(uint32_t)) &&
+         write_all(fd, s.materials.data(), h.materials * sizeof(Material));
+  }
+  ::_exit(ok ? 0 : 3);
+}
+
+double import_timeout_seconds(const std::string& path) {
+  if (const char* env = std::getenv("RAYLAB_IMPORT_TIMEOUT")) {
+    const double v = std::atof(env);
+    if (v > 0) return v;
+  }
+  std::error_code ec;
+  const double mb = static_cast<double>(fs::file_size(path, ec)) / (1 << 20);
+  return 30.0 + 2.0 * (ec ? 0.0 : mb);  // generous: real files load at > 50 MB/s
+}
+
+void import_isolated(const std::string& path, Scene& s) {
+  const int fd = ::memfd_create("raylab-import", MFD_CLOEXEC);
+  if (fd < 0) throw SceneLoadError(fmt::format("{}: cannot create memory file: {}", path, std::strerror(errno)));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw SceneLoadError(fmt::format("{}: cannot fork the importer: {}", path, std::strerror(errno)));
+  if (pid == 0) child_import(path, fd);
+
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(import_timeout_seconds(path));
+  int status = 0;
+  while (true) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) break;
+    if (r < 0 && errno != EINTR) throw SceneLoadError(fmt::format("{}: lost the importer process", path));
+    if (std::chrono::steady_clock::now() > deadline) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      throw SceneLoadError(fmt::format("{}: cannot load mesh: the importer did not finish (malformed or truncated file?)", path));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  if (WIFSIGNALED(status))
+    throw SceneLoadError(fmt::format("{}: cannot load mesh: the importer crashed ({}); the file is malformed or truncated",
+                                     path, strsignal(WTERMSIG(status))));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw SceneLoadError(fmt::format("{}: cannot load mesh: the importer failed (exit code {})", path,
+                                     WIFEXITED(status) ? WEXITSTATUS(status) : -1));
+
+  ImportHeader h;
+  ::lseek(fd, 0, SEEK_SET);
+  if (!read_all(fd, &h, sizeof h) || h.magic != ImportHeader{}.magic)
+    throw SceneLoadError(fmt::format("{}: cannot load mesh: importer returned no data", path));
+  if (h.error_bytes > 0) {
+    std::string error(h.error_bytes, '\0');
+    read_all(fd, error.data(), error.size());
+    throw SceneLoadError(error);
+  }
+  s.mesh.vertices.resize(h.vertices);
+  s.mesh.triangles.resize(h.triangles);
+  s.material_ids.resize(h.triangles);
+  s.materials.resize(h.materials);
+  if (!read_all(fd, s.mesh.vertices.data(), h.vertices * sizeof(Vec3f)) ||
+      !read_all(fd, s.mesh.triangles.data(), h.triangles * sizeof(std::array<uint32_t, 3>)) ||
+      !read_all(fd, s.material_ids.data(), h.triangles * sizeof(uint32_t)) ||
+      !read_all(fd, s.materials.data(), h.materials * sizeof(Material)))
+    throw SceneLoadError(fmt::format("{}: cannot load mesh: importer data truncated", path));
+}
+
 }  // namespace
 
 Scene load_mesh_file(const std::string& path) {
@@ -115,22 +269,10 @@ Scene load_mesh_file(const std::string& path) {
     if (!probe) throw SceneLoadError(fmt::format("{}: cannot open for reading", path));
   }
 
-  Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* ai = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_SortByPType);
-  if (!ai) {
-    std::string why = importer.GetErrorString();
-    if (why.empty()) why = "unknown format or unreadable";
-    throw SceneLoadError(fmt::format("{}: cannot load mesh: {}", path, why));
-  }
-  if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE || !ai->mRootNode)
-    throw SceneLoadError(fmt::format("{}: file is incomplete (no mesh data)", path));
-
+  precheck_mesh_file(path);
   Scene s;
   s.name = path;
-  Merger m{ai, path, s, std::vector<int>(ai->mNumMaterials, -1)};
-  if (ai->mNumMaterials == 0) s.materials.push_back(Material{});
-  m.walk(ai->mRootNode, aiMatrix4x4(), 0);
+  import_isolated(path, s);
   if (s.mesh.num_triangles() == 0) throw SceneLoadError(fmt::format("{}: contains no triangles", path));
   if (s.materials.empty()) s.materials.push_back(Material{});
   try {

@@ -1,0 +1,198 @@
+// Every registered accelerator against brute force and Embree: the same hits,
+// ids and distances on random soups and the Cornell box; occlusion consistent
+// with closest hit; invalid rays and empty scenes handled. New accelerators
+// are covered automatically through the registry.
+#include <gtest/gtest.h>
+
+#include "accel/registry.h"
+#include "bench/ray_sets.h"
+#include "bench/verify.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_registry.h"
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+std::vector<std::string> tested_accelerators() {
+  std::vector<std::string> names;
+  for (const auto& info : accelerator_registry())
+    if (info.name != "embree") names.push_back(info.name);
+  return names;
+}
+
+class EveryAccelerator : public ::testing::TestWithParam<std::string> {};
+
+// Compares closest hits with brute force: same hit/miss, and the same
+// triangle or (for coplanar/shared-edge ties) exactly the same distance.
+// Both use the same watertight test on the same vertices, so distances of
+// the same triangle are bit-identical.
+void expect_same_as_brute(const Scene& scene, const std::string& spec, const std::vector<Ray>& rays,
+                          bool expect_hits = true) {
+  auto accel = make_accelerator(spec);
+  auto brute = make_accelerator("brute");
+  accel->build(scene.mesh);
+  brute->build(scene.mesh);
+  std::vector<Hit> a(rays.size()), b(rays.size());
+  std::vector<uint8_t> occ(rays.size());
+  accel->intersect(rays, a);
+  brute->intersect(rays, b);
+  accel->occluded(rays, occ);
+  size_t hits = 0, bad = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    hits += b[i].valid();
+    const bool same = a[i].valid() == b[i].valid() && (!a[i].valid() || a[i].prim == b[i].prim || a[i].t == b[i].t);
+    if (!same && bad++ < 5)
+      ADD_FAILURE() << spec << " ray " << i << ": got prim " << a[i].prim << " t " << a[i].t << ", brute prim "
+                    << b[i].prim << " t " << b[i].t;
+    if (a[i].valid() && a[i].prim == b[i].prim) {
+      EXPECT_EQ(a[i].u, b[i].u);
+      EXPECT_EQ(a[i].v, b[i].v);
+    }
+    EXPECT_EQ(static_cast<bool>(occ[i]), b[i].valid()) << spec << " occlusion, ray " << i;
+  }
+  EXPECT_EQ(bad, 0u) << spec << " on " << scene.name;
+  if (expect_hits) {
+    EXPECT_GT(hits, rays.size() / 20) << "ray set too easy: few hits on " << scene.name;
+  }
+}
+
+TEST_P(EveryAccelerator, AgreesWithBruteForceOnSoups) {
+  for (size_t n : {1u, 7u, 300u, 5000u}) {
+    const Scene s = make_triangle_soup(n, 11 + n, n < 10 ? 20.0f : 1.0f);
+    auto ref = make_accelerator("brute");
+    ref->build(s.mesh);
+    RaySetOptions o;
+    o.jittered_primary = true;
+    o.primary_count = 3000;
+    o.random_count = 3000;
+    for (const auto& set : make_ray_sets(s, {"primary", "random"}, *ref, o))
+      expect_same_as_brute(s, GetParam(), set.rays, n >= 300);
+  }
+}
+
+TEST_P(EveryAccelerator, AgreesWithBruteForceOnCornellBox) {
+  const Scene s = make_cornell_box();
+  auto ref = make_accelerator("brute");
+  ref->build(s.mesh);
+  RaySetOptions o;
+  o.width = 64;
+  o.height = 64;
+  o.random_count = 5000;
+  for (const auto& set : make_ray_sets(s, {"primary", "random", "diffuse"}, *ref, o))
+    expect_same_as_brute(s, GetParam(), set.rays);
+}
+
+TEST_P(EveryAccelerator, AgreesWithEmbreeAfterArbitration) {
+  // Brute force is O(N) per ray: it gets a smaller soup.
+  const char* soup = GetParam() == "brute" ? "soup:n=2000,seed=3" : "soup:n=20000,seed=3";
+  for (const char* scene : {soup, "cornell", "sphere:segments=64,rings=32"}) {
+    VerifyOptions vo;
+    vo.rays = 20000;
+    vo.ray_sets = {"primary", "random", "diffuse", "shadow"};
+    const auto records = verify_accelerators(load_scene(scene), {GetParam()}, vo);
+    ASSERT_EQ(records.size(), 4u);
+    for (const auto& r : records) {
+      EXPECT_EQ(r.raylab_wrong, 0u) << r.accel << " " << scene << " " << r.ray_set;
+      EXPECT_EQ(r.occlusion_disagree, 0u) << r.accel << " " << scene << " " << r.ray_set;
+      EXPECT_LT(r.max_rel_t_err, 1e-3) << r.accel << " " << scene << " " << r.ray_set;
+      EXPECT_GT(r.rays, 1000u);
+    }
+  }
+}
+
+TEST_P(EveryAccelerator, InvalidRaysMiss) {
+  const Scene s = make_triangle_soup(100, 5);
+  auto accel = make_accelerator(GetParam());
+  accel->build(s.mesh);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const std::vector<Ray> rays = {
+      Ray(Vec3f(nan, 0.5f, 0.5f), Vec3f(1, 0, 0)),      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 0)),
+      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, nan, 1)),     Ray(Vec3f(inf, 0.5f, 0.5f), Vec3f(-1, 0, 0)),
+      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 1), 2, 1),  // tmin > tmax
+      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 1), nan, 5),
+  };
+  std::vector<Hit> hits(rays.size());
+  std::vector<uint8_t> occ(rays.size(), 7);
+  accel->intersect(rays, hits);
+  accel->occluded(rays, occ);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_FALSE(hits[i].valid()) << GetParam() << " ray " << i;
+    EXPECT_EQ(occ[i], 0) << GetParam() << " ray " << i;
+  }
+}
+
+TEST_P(EveryAccelerator, EmptyAndSingleTriangleScenes) {
+  TriangleMesh empty;
+  auto a = make_accelerator(GetParam());
+  a->build(empty);
+  EXPECT_FALSE(a->intersect1(Ray(Vec3f::Zero(), Vec3f(0, 0, 1))).valid());
+  EXPECT_FALSE(a->occluded1(Ray(Vec3f::Zero(), Vec3f(0, 0, 1))));
+
+  TriangleMesh one;
+  one.vertices = {Vec3f(0, 0, 5), Vec3f(1, 0, 5), Vec3f(0, 1, 5)};
+  one.triangles = {{0, 1, 2}};
+  auto b = make_accelerator(GetParam());
+  b->build(one);
+  const Hit h = b->intersect1(Ray(Vec3f(0.2f, 0.2f, 0), Vec3f(0, 0, 1)));
+  ASSERT_TRUE(h.valid());
+  EXPECT_EQ(h.prim, 0u);
+  EXPECT_FLOAT_EQ(h.t, 5.0f);
+  EXPECT_FALSE(b->intersect1(Ray(Vec3f(0.2f, 0.2f, 0), Vec3f(0, 0, 1), 0, 4.9f)).valid());
+  EXPECT_TRUE(b->occluded1(Ray(Vec3f(0.2f, 0.2f, 0), Vec3f(0, 0, 1), 0, 5.1f)));
+  EXPECT_FALSE(b->intersect1(Ray(Vec3f(0.2f, 0.2f, 0), Vec3f(0, 0, -1))).valid());
+}
+
+TEST_P(EveryAccelerator, RejectsInvalidMesh) {
+  TriangleMesh bad;
+  bad.vertices = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)};
+  bad.triangles = {{0, 1, 3}};
+  EXPECT_THROW(make_accelerator(GetParam())->build(bad), MeshError);
+  bad.triangles = {{0, 1, 2}};
+  bad.vertices[1].y() = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(make_accelerator(GetParam())->build(bad), MeshError);
+}
+
+TEST_P(EveryAccelerator, CountersAreFilledByTheInstrumentedKernel) {
+  const Scene s = make_triangle_soup(2000, 9);
+  auto a = make_accelerator(GetParam());
+  a->build(s.mesh);
+  auto ref = make_accelerator("brute");
+  ref->build(s.mesh);
+  RaySetOptions o;
+  o.width = 32;
+  o.height = 32;
+  const RaySet set = make_ray_sets(s, {"primary"}, *ref, o)[0];
+  std::vector<Hit> plain(set.rays.size()), counted(set.rays.size());
+  TraversalStats stats;
+  a->intersect(set.rays, plain);
+  a->intersect(set.rays, counted, &stats);
+  for (size_t i = 0; i < plain.size(); ++i) ASSERT_EQ(plain[i].prim, counted[i].prim);
+  EXPECT_EQ(stats.rays, set.rays.size());
+  EXPECT_GT(stats.triangle_tests, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, EveryAccelerator, ::testing::ValuesIn(tested_accelerators()),
+                         [](const auto& info) { return info.param; });
+
+TEST(Embree, AgreesWithBruteForceOnSoup) {
+  const Scene s = make_triangle_soup(3000, 2);
+  auto e = make_accelerator("embree:robust=1");
+  e->build(s.mesh);
+  auto b = make_accelerator("brute");
+  b->build(s.mesh);
+  RaySetOptions o;
+  o.random_count = 5000;
+  const RaySet set = make_ray_sets(s, {"random"}, *b, o)[0];
+  size_t disagree = 0;
+  for (const Ray& r : set.rays) {
+    const Hit x = e->intersect1(r), y = b->intersect1(r);
+    disagree += x.valid() != y.valid() || (x.valid() && x.prim != y.prim && std::fabs(x.t - y.t) > 1e-4f * y.t);
+  }
+  EXPECT_LE(disagree, 2u);
+  const BuildStats st = e->build(s.mesh);
+  EXPECT_GT(st.bytes, 3000u * 10);
+}
+
+}  // namespace
+}  // namespace raylab
