@@ -70,7 +70,8 @@ TriangleMesh make_flat_scene(int tiles, size_t extra, uint64_t seed) {
 
 // "Teapot in a stadium": a closed room 1000 units wide (floor tessellated,
 // walls and ceiling as big triangles) around a dense sphere of diameter 1
-// (about 8,000 triangles), 1000x smaller than the room.
+// (about 8,000 triangles), 1000x smaller than the room, resting on a huge
+// table top that crosses its cell.
 TriangleMesh make_stadium_scene() {
   TriangleMesh m;
   const float h = 500.0f;
@@ -94,6 +95,7 @@ TriangleMesh make_stadium_scene() {
       add_triangle(m, {x0, y0, -h}, {x1, y1, -h}, {x1, y0, -h});
       add_triangle(m, {x0, y0, -h}, {x0, y1, -h}, {x1, y1, -h});
     }
+  add_triangle(m, {-300, -300, 0.99f}, {300, -300, 0.99f}, {0, 300, 0.99f});
   m.append(make_uv_sphere(90, 45, Vec3f(3.0f, -2.0f, 1.5f), 0.5f));
   return m;
 }
@@ -587,6 +589,10 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
   };
   const double grid = tests_per_ray("grid");
   const double grid2 = tests_per_ray("grid2");
+  auto two = make_accelerator("grid2");
+  const BuildStats st = two->build(m);
+  EXPECT_GT(st.extra.at("large_refs"), 0.0);  // the walls and the table top stay at the top level
+  EXPECT_GT(st.extra.at("subgrids"), 0.0);
   EXPECT_GT(grid, 500.0);           // the single grid collapses: the object sits in a few cells
   EXPECT_LT(grid2 * 10.0, grid);    // the two-level grid does not
   EXPECT_LT(grid2, 50.0);

@@ -1,10 +1,13 @@
 #pragma once
 // Nested 3D-DDA through a two-level grid: the outer walk visits top cells;
-// in a top cell with a sub-grid, the ray's part within that cell ([t_enter,
-// t_exit], shortened to the closest hit so far) is clipped to the sub-grid's
-// box and walked by the inner DDA. One mailbox and one closest hit serve
-// both levels; the stopping rule of grid_ray_query.h applies to the inner
-// cells and again to the top cell once its sub-grid is done.
+// in a non-empty top cell the ray first tests the cell's large triangles,
+// then its part within the cell ([t_enter, t_exit], shortened to the
+// closest hit so far) is clipped to the sub-grid's box and walked by the
+// inner DDA. One mailbox and one closest hit serve both levels; the
+// stopping rule of grid_ray_query.h applies to the inner cells (the large
+// triangles of the top cell have been tested by then, and outside the
+// sub-grid's box the cell holds no other triangle) and again to the top
+// cell once its sub-grid is done.
 #include <cstdint>
 
 #include "accel/grid/dda.h"
@@ -16,7 +19,7 @@ namespace raylab {
 struct TwoLevelGridView {
   DdaGrid top;
   const uint32_t* top_cells = nullptr;
-  const SubGrid* subgrids = nullptr;
+  const TopCellContent* contents = nullptr;
   const uint32_t* offsets = nullptr;
   const uint32_t* refs = nullptr;
   const GridTriangle* tris = nullptr;
@@ -34,8 +37,16 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
   dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) {
     if constexpr (kCount) stats->nodes_visited++;
     const uint32_t k = g.top_cells[top_cell];
-    if (k == kNoSubGrid) return false;
-    const SubGrid& sub = g.subgrids[k];
+    if (k == kEmptyTopCell) return false;
+    const TopCellContent& content = g.contents[k];
+    if (content.large_count != 0 &&
+        q.template test_cell<kAnyHit, kCount>(g.refs + content.large_begin, content.large_count, g.tris, stats))
+      return true;
+    if (!content.has_subgrid()) {
+      if constexpr (kAnyHit) return false;
+      return q.done_at(t_exit);
+    }
+    const TopCellContent& sub = content;
     const DdaGrid sub_dda = sub.dda();
     double s0 = t_enter, s1 = t_exit < q.tmax ? t_exit : static_cast<double>(q.tmax);
     if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {

@@ -17,7 +17,7 @@ class TwoLevelGridAccel final : public GridAccelerator<TwoLevelGridAccel> {
     Timer timer;
     BuildStats s;
     grid_ = build_two_level_grid(mesh, opt_, s);
-    view_ = TwoLevelGridView{grid_.top,          grid_.top_cells.data(), grid_.subgrids.data(), grid_.offsets.data(),
+    view_ = TwoLevelGridView{grid_.top,          grid_.top_cells.data(), grid_.contents.data(), grid_.offsets.data(),
                              grid_.refs.data(),  grid_.tris.data(),      grid_.empty};
     s.build_ms = timer.ms();
     return s;
