@@ -6,7 +6,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_scan.h>
 
 namespace raylab {
@@ -51,28 +50,35 @@ bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const GridTri
   const size_t cells = g.cells();
   std::vector<uint32_t> counts(cells + 1, 0);
 
-  // Pass 1: count (per cell, and in total to check the budget before filling).
-  const uint64_t total = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, ids.size(), kTriangleGrain), uint64_t{0},
-      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          const GridTriangle& t = tris[ids[i]];
-          for_each_assigned_cell(g, mode, t.p0, t.p1, t.p2, [&](int32_t x, int32_t y, int32_t z) {
-            std::atomic_ref<uint32_t>(counts[g.index(x, y, z)]).fetch_add(1, std::memory_order_relaxed);
-            ++sum;
-          });
-        }
-        return sum;
-      },
-      [](uint64_t a, uint64_t b) { return a + b; });
-  if (total > max_refs || total > UINT32_MAX) return false;
+  // Pass 1: count (per cell, and in total to check the budget before
+  // filling). Threads publish their counts in chunks and all stop once the
+  // total exceeds the limit, so an oversized request costs little time.
+  const uint64_t limit = std::min<uint64_t>(max_refs, UINT32_MAX);
+  constexpr uint64_t kPublish = 4096;
+  std::atomic<uint64_t> total{0};
+  std::atomic<bool> over{false};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
+    uint64_t local = 0;
+    for (size_t i = r.begin(); i < r.end() && !over.load(std::memory_order_relaxed); ++i) {
+      const GridTriangle& t = tris[ids[i]];
+      for_each_assigned_cell(g, mode, t.p0, t.p1, t.p2, [&](int32_t x, int32_t y, int32_t z) {
+        std::atomic_ref<uint32_t>(counts[g.index(x, y, z)]).fetch_add(1, std::memory_order_relaxed);
+        if (++local < kPublish) return true;
+        if (total.fetch_add(local) + local > limit) over = true;
+        local = 0;
+        return !over.load(std::memory_order_relaxed);
+      });
+    }
+    if (total.fetch_add(local) + local > limit) over = true;
+  });
+  if (over) return false;
 
   // Pass 2: offsets.
   exclusive_scan(counts);
   out.offsets = std::move(counts);
 
   // Pass 3: fill through per-cell cursors.
-  out.refs.resize(total);
+  out.refs.resize(out.offsets.back());
   std::vector<uint32_t> cursor(out.offsets.begin(), out.offsets.end() - 1);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {

@@ -13,6 +13,7 @@
 // bounding box; cheaper to build, more references (for the study).
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 #include "accel/core/aabb.h"
 #include "accel/grid/dda_grid.h"
@@ -22,10 +23,26 @@ namespace raylab {
 
 enum class AssignMode : uint8_t { Exact, Bbox };
 
+namespace detail {
+
+// Calls f; a callback returning bool can stop the enumeration with false.
+template <typename F>
+inline bool keep_going(F& f, int32_t x, int32_t y, int32_t z) {
+  if constexpr (std::is_same_v<decltype(f(x, y, z)), bool>) {
+    return f(x, y, z);
+  } else {
+    f(x, y, z);
+    return true;
+  }
+}
+
+}  // namespace detail
+
 // Calls f(x, y, z) for every cell of `g` the triangle (p0, p1, p2) is
 // assigned to. Parts of the triangle outside the grid are ignored (the
 // two-level grid assigns a cell's triangles to a sub-grid covering only
-// that cell).
+// that cell). If f returns bool, returning false stops the enumeration (the
+// builders' count passes stop once a memory budget is exceeded).
 template <typename F>
 inline void for_each_assigned_cell(const DdaGrid& g, AssignMode mode, const Vec3f& p0, const Vec3f& p1,
                                    const Vec3f& p2, F&& f) {
@@ -45,7 +62,8 @@ inline void for_each_assigned_cell(const DdaGrid& g, AssignMode mode, const Vec3
   if (mode == AssignMode::Bbox) {
     for (int32_t z = lo[2]; z <= hi[2]; ++z)
       for (int32_t y = lo[1]; y <= hi[1]; ++y)
-        for (int32_t x = lo[0]; x <= hi[0]; ++x) f(x, y, z);
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+          if (!detail::keep_going(f, x, y, z)) return;
     return;
   }
 
@@ -80,7 +98,7 @@ inline void for_each_assigned_cell(const DdaGrid& g, AssignMode mode, const Vec3
       for (c[d] = d0; c[d] <= d1; ++c[d]) {
         const Vec3d box_lo(cell_lo(0, c[0]), cell_lo(1, c[1]), cell_lo(2, c[2]));
         const Vec3d box_hi(cell_hi(0, c[0]), cell_hi(1, c[1]), cell_hi(2, c[2]));
-        if (triangle_box_overlap(box_lo, box_hi, v0, v1, v2)) f(c[0], c[1], c[2]);
+        if (triangle_box_overlap(box_lo, box_hi, v0, v1, v2) && !detail::keep_going(f, c[0], c[1], c[2])) return;
       }
     }
   }

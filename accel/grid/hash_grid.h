@@ -27,8 +27,8 @@ struct HashGrid {
   bool empty = true;
 };
 
-// The budget bounds the references and the build's (key, id) pairs; an
-// excess lowers the density with one warning. Fills `stats` except build_ms.
+// The budget bounds the build's peak (the (key, id) pairs, the references
+// and the table); an excess lowers the density with one warning. Fills `stats` except build_ms.
 HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& options, BuildStats& stats);
 
 }  // namespace raylab
