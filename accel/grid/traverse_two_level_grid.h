@@ -46,11 +46,10 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
       if constexpr (kAnyHit) return false;
       return q.done_at(t_exit);
     }
-    const TopCellContent& sub = content;
-    const DdaGrid sub_dda = sub.dda();
+    const DdaGrid sub_dda = content.dda();
     double s0 = t_enter, s1 = t_exit < q.tmax ? t_exit : static_cast<double>(q.tmax);
     if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
-      const uint32_t* offsets = g.offsets + sub.offsets_base;
+      const uint32_t* offsets = g.offsets + content.offsets_base;
       const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) {
         if constexpr (kCount) stats->nodes_visited++;
         const uint32_t begin = offsets[cell], end = offsets[cell + 1];
