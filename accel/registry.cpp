@@ -6,6 +6,7 @@
 #include "accel/bvh/bvh_accel.h"
 #include "accel/embree/embree_accel.h"
 #include "accel/kdtree/kdtree_accel.h"
+#include "accel/grid/grid_accels.h"
 
 namespace raylab {
 
@@ -16,6 +17,9 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       brute_accelerator_info(),
       bvh_accelerator_info(),
       kdtree_accelerator_info(),
+      grid_accelerator_info(),
+      hashgrid_accelerator_info(),
+      grid2_accelerator_info(),
   };
   return registry;
 }

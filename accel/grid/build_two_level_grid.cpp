@@ -1,0 +1,293 @@
+#include "accel/grid/two_level_grid.h"
+
+#include <algorithm>
+#include <atomic>
+#include <numeric>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "accel/grid/cell_lists.h"
+#include "accel/grid/grid_stats.h"
+
+namespace raylab {
+
+namespace {
+
+// Sub-grids whose triangles are large compared with their cells (stacked
+// copies, a few big triangles) would list every triangle in most cells. A
+// sub-grid is coarsened until its bounding-box estimate of references is at
+// most this many per triangle and unit of density.
+constexpr double kMaxBboxRefsPerTriangle = 16.0;
+
+// A triangle is large in a top cell when its bounds, clipped to the cell,
+// span at least this fraction of the cell along two axes or more.
+constexpr double kLargeFraction = 0.5;
+
+struct SubGridPlan {
+  uint32_t top_cell = 0;
+  std::vector<uint32_t> small, large;            // the top cell's triangles, split
+  Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();  // padded box of the sub-grid
+  Vec3d extent = Vec3d::Zero();                  // unpadded extent, for the resolution rule
+  TopCellContent content{};
+};
+
+// Splits the top cell's triangles into large and small, and boxes the small
+// ones: their bounds clipped to the cell (enlarged by the top grid's
+// assignment margin, as the assignment was), then padded like a grid box.
+void plan_box(const DdaGrid& top, std::span<const GridTriangle> tris, std::span<const uint32_t> ids,
+              SubGridPlan& p) {
+  const int64_t cell = p.top_cell;
+  const int64_t c[3] = {cell % top.res[0], (cell / top.res[0]) % top.res[1],
+                        cell / (static_cast<int64_t>(top.res[0]) * top.res[1])};
+  const Vec3d margin = assignment_margin(top);
+  Vec3d cell_lo, cell_hi;
+  for (int a = 0; a < 3; ++a) {
+    cell_lo[a] = top.boundary(a, c[a]) - margin[a];
+    cell_hi[a] = top.boundary(a, c[a] + 1) + margin[a];
+  }
+  Vec3d blo = Vec3d::Constant(std::numeric_limits<double>::infinity());
+  Vec3d bhi = -blo;
+  for (const uint32_t id : ids) {
+    const GridTriangle& t = tris[id];
+    Vec3d tlo = t.p0.cast<double>().cwiseMin(t.p1.cast<double>()).cwiseMin(t.p2.cast<double>());
+    Vec3d thi = t.p0.cast<double>().cwiseMax(t.p1.cast<double>()).cwiseMax(t.p2.cast<double>());
+    tlo = tlo.cwiseMax(cell_lo);
+    thi = thi.cwiseMin(cell_hi);
+    int spanning = 0;
+    for (int a = 0; a < 3; ++a) spanning += thi[a] - tlo[a] >= kLargeFraction * top.cell[a];
+    if (spanning >= 2) {
+      p.large.push_back(id);
+    } else {
+      p.small.push_back(id);
+      blo = blo.cwiseMin(tlo);
+      bhi = bhi.cwiseMax(thi);
+    }
+  }
+  if (p.small.empty()) return;
+  for (int a = 0; a < 3; ++a)
+    if (bhi[a] < blo[a]) bhi[a] = blo[a];  // only possible through rounding
+  p.extent = bhi - blo;
+  double magnitude = 0.0;
+  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(blo[a]), std::fabs(bhi[a])});
+  const double largest_top_cell = std::max({top.cell[0], top.cell[1], top.cell[2]});
+  const double pad = std::max({1e-5 * p.extent.maxCoeff(), 1e-7 * largest_top_cell, 1e-6 * magnitude, 1e-30});
+  p.lo = blo.array() - pad;
+  p.hi = bhi.array() + pad;
+}
+
+void set_resolution(SubGridPlan& p, const GridRes& res) {
+  for (int a = 0; a < 3; ++a) {
+    p.content.lo[a] = p.lo[a];
+    p.content.cell[a] = (p.hi[a] - p.lo[a]) / res[a];
+    p.content.res[a] = res[a];
+  }
+}
+
+// Cells covered by the triangles' bounding boxes (an upper bound of the
+// references the sub-grid will hold).
+double bbox_refs(const SubGridPlan& p, std::span<const GridTriangle> tris) {
+  const DdaGrid g = p.content.dda();
+  double sum = 0.0;
+  for (const uint32_t id : p.small) {
+    const GridTriangle& t = tris[id];
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const int32_t lo = g.coord(a, std::min({t.p0[a], t.p1[a], t.p2[a]}));
+      const int32_t hi = g.coord(a, std::max({t.p0[a], t.p1[a], t.p2[a]}));
+      cells *= hi - lo + 1;
+    }
+    sum += cells;
+  }
+  return sum;
+}
+
+// The n^(1/3) rule for the top cell's triangles, coarsened when they are
+// large compared with the cells.
+void size_subgrid(SubGridPlan& p, double lambda, std::span<const GridTriangle> tris) {
+  if (p.small.empty()) return;  // no sub-grid: res stays 0
+  const double n = static_cast<double>(p.small.size());
+  const double limit = kMaxBboxRefsPerTriangle * std::max(1.0, lambda) * n;
+  for (double l = lambda;; l *= 0.5) {
+    const GridRes res = resolution_by_density(p.extent, n, l);
+    set_resolution(p, res);
+    if (total_cells(res) == 1 || bbox_refs(p, tris) <= limit) return;
+  }
+}
+
+std::runtime_error budget_error(const GridOptions& opt, size_t n) {
+  return std::runtime_error(
+      fmt::format("grid2: a memory budget of {} MiB cannot hold the references of {} triangles", opt.budget_mib, n));
+}
+
+}  // namespace
+
+TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
+  TwoLevelGrid g;
+  const size_t n = mesh.num_triangles();
+  g.tris = copy_grid_triangles(mesh);
+  g.empty = n == 0;
+  if (g.empty) return g;
+
+  const Aabb bounds = mesh.bounds();
+  Vec3d lo, hi;
+  padded_grid_box(bounds, lo, hi);
+  const Vec3d extent = (bounds.hi - bounds.lo).cast<double>();
+  const uint64_t budget = opt.budget_bytes();
+  std::vector<uint32_t> all_ids(n);
+  std::iota(all_ids.begin(), all_ids.end(), 0u);
+
+  // Budget: the top cells (4 bytes each) get at most 1/8 of it; the top
+  // level's references, which live only during the build, at most half;
+  // the final structure (top cells, sub-grid records, sub-grid cells and
+  // references) all of it.
+  const uint64_t top_cell_limit = std::max<uint64_t>(1, budget / 8 / sizeof(uint32_t));
+  const uint64_t top_ref_limit = budget / 2 / sizeof(uint32_t);
+  ChosenResolution top = choose_resolution(extent, static_cast<double>(n), opt.top_density, top_cell_limit);
+  CellLists top_lists;
+  while (true) {
+    g.top = make_dda_grid(lo, hi, top.res);
+    if (build_cell_lists(g.top, opt.assign, g.tris, all_ids, top_ref_limit, top_lists)) break;
+    if (total_cells(top.res) == 1) throw budget_error(opt, n);
+    top = choose_resolution(extent, static_cast<double>(n), top.lambda / 2, top_cell_limit);
+    top.capped = true;
+  }
+  std::vector<uint32_t>().swap(all_ids);
+
+  // Per non-empty top cell: its large triangles, and a sub-grid over the
+  // part of the cell its small triangles occupy.
+  std::vector<SubGridPlan> plans;
+  for (uint32_t c = 0; c + 1 < top_lists.offsets.size(); ++c) {
+    if (top_lists.offsets[c + 1] == top_lists.offsets[c]) continue;
+    plans.emplace_back();
+    plans.back().top_cell = c;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const uint32_t c = plans[k].top_cell;
+      const std::span<const uint32_t> ids(top_lists.refs.data() + top_lists.offsets[c],
+                                          top_lists.offsets[c + 1] - top_lists.offsets[c]);
+      plan_box(g.top, g.tris, ids, plans[k]);
+    }
+  });
+  uint64_t large_refs = 0;
+  for (const auto& p : plans) large_refs += p.large.size();
+
+  const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(TopCellContent) +
+                             large_refs * sizeof(uint32_t);
+  if (top_bytes >= budget) throw budget_error(opt, n);
+  double lambda = opt.density;
+  bool sub_capped = false;
+  std::vector<CellLists> lists(plans.size());
+  while (true) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) size_subgrid(plans[k], lambda, g.tris);
+    });
+    uint64_t sub_offsets = 0;
+    for (const auto& p : plans)
+      if (p.content.has_subgrid()) sub_offsets += p.content.dda().cells() + 1;
+    const uint64_t fixed = top_bytes + sub_offsets * sizeof(uint32_t);
+    if (fixed >= budget) {
+      // Cells alone exceed the budget: scale the density by the excess.
+      if (lambda < 1e-9) throw budget_error(opt, n);
+      lambda *= std::min(0.5, static_cast<double>(budget - top_bytes) / static_cast<double>(sub_offsets * sizeof(uint32_t)));
+      sub_capped = true;
+      continue;
+    }
+    const uint64_t ref_limit = (budget - fixed) / sizeof(uint32_t);
+    std::atomic<uint64_t> refs{0};
+    std::atomic<bool> over{false};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        if (over.load(std::memory_order_relaxed)) return;
+        if (!plans[k].content.has_subgrid()) continue;
+        if (!build_cell_lists(plans[k].content.dda(), opt.assign, g.tris, plans[k].small, ref_limit, lists[k]) ||
+            refs.fetch_add(lists[k].refs.size()) + lists[k].refs.size() > ref_limit)
+          over = true;
+      }
+    });
+    if (!over) break;
+    if (lambda < 1e-9) throw budget_error(opt, n);
+    lambda /= 2;
+    sub_capped = true;
+    for (auto& l : lists) l = CellLists{};
+  }
+  if (top.capped || sub_capped) {
+    warn_budget_capped("grid2", fmt::format("top={}, density={}", opt.top_density, opt.density),
+                       fmt::format("top={:.4g} (res={}), density={:.4g}", top.lambda, format_grid_resolution(top.res), lambda),
+                       opt.budget_mib);
+  }
+
+  // Concatenate: top cell k's large triangles, then its sub-grid's
+  // references, in the one refs array; the sub-grid's offsets start at its
+  // base in the one offsets array and point into refs.
+  g.top_cells.assign(total_cells(top.res), kEmptyTopCell);
+  g.contents.resize(plans.size());
+  uint64_t offsets_total = 0, refs_total = 0;
+  std::vector<uint64_t> refs_base(plans.size());
+  for (size_t k = 0; k < plans.size(); ++k) {
+    g.top_cells[plans[k].top_cell] = static_cast<uint32_t>(k);
+    TopCellContent& content = g.contents[k];
+    content = plans[k].content;
+    content.offsets_base = static_cast<uint32_t>(offsets_total);
+    content.large_begin = static_cast<uint32_t>(refs_total);
+    content.large_count = static_cast<uint32_t>(plans[k].large.size());
+    refs_base[k] = refs_total + plans[k].large.size();
+    offsets_total += lists[k].offsets.size();
+    refs_total += plans[k].large.size() + lists[k].refs.size();
+  }
+  if (offsets_total > UINT32_MAX || refs_total > UINT32_MAX)
+    throw std::runtime_error("grid2: more than 2^32 cells or references");
+  g.offsets.resize(offsets_total);
+  g.refs.resize(refs_total);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const TopCellContent& content = g.contents[k];
+      std::copy(plans[k].large.begin(), plans[k].large.end(), g.refs.begin() + content.large_begin);
+      const uint32_t base = static_cast<uint32_t>(refs_base[k]);
+      uint32_t* out = g.offsets.data() + content.offsets_base;
+      for (const uint32_t o : lists[k].offsets) *out++ = base + o;
+      std::copy(lists[k].refs.begin(), lists[k].refs.end(), g.refs.begin() + static_cast<ptrdiff_t>(base));
+      lists[k] = CellLists{};
+    }
+  });
+
+  // Statistics: cells of both levels; occupancy of the second level, where
+  // the triangles are.
+  uint64_t sub_cells = 0, nonempty = 0;
+  uint32_t max_per_cell = 0;
+  uint64_t subgrids = 0;
+  for (const TopCellContent& s : g.contents) {
+    if (!s.has_subgrid()) continue;
+    ++subgrids;
+    const uint64_t cells = total_cells(GridRes{s.res[0], s.res[1], s.res[2]});
+    const CellOccupancy occ = measure_occupancy(std::span<const uint32_t>(g.offsets.data() + s.offsets_base, cells + 1));
+    sub_cells += cells;
+    nonempty += occ.nonempty;
+    max_per_cell = std::max(max_per_cell, occ.max_per_cell);
+  }
+  add_occupancy_stats(stats, total_cells(top.res) + sub_cells, nonempty, refs_total, max_per_cell, n);
+  stats.extra["empty_fraction"] = sub_cells ? 1.0 - static_cast<double>(nonempty) / static_cast<double>(sub_cells) : 0.0;
+  stats.extra["top_cells"] = static_cast<double>(total_cells(top.res));
+  stats.extra["top_res_x"] = top.res[0];
+  stats.extra["top_res_y"] = top.res[1];
+  stats.extra["top_res_z"] = top.res[2];
+  stats.extra["top_lambda"] = top.lambda;
+  stats.extra["top_refs_per_triangle"] = static_cast<double>(top_lists.refs.size()) / static_cast<double>(n);
+  stats.extra["subgrids"] = static_cast<double>(subgrids);
+  stats.extra["large_refs"] = static_cast<double>(large_refs);
+  stats.extra["sub_cells"] = static_cast<double>(sub_cells);
+  stats.extra["lambda"] = lambda;
+  stats.extra["lambda_requested"] = opt.density;
+  stats.extra["budget_capped"] = (top.capped || sub_capped) ? 1.0 : 0.0;
+  stats.max_depth = 2;
+  stats.avg_depth = 2.0;
+  stats.bytes = g.top_cells.capacity() * sizeof(uint32_t) + g.contents.capacity() * sizeof(TopCellContent) +
+                (g.offsets.capacity() + g.refs.capacity()) * sizeof(uint32_t) +
+                g.tris.capacity() * sizeof(GridTriangle) + sizeof(TwoLevelGrid);
+  return g;
+}
+
+}  // namespace raylab

@@ -1,0 +1,92 @@
+#pragma once
+// The geometry of one uniform grid as the 3D-DDA and the builders see it:
+// box, cell size and resolution, in double precision.
+//
+// Why double: the DDA computes the distance to every cell boundary afresh as
+// (boundary - org) / dir, never by accumulating increments, and in double
+// the rounding of those distances (~1e-16 relative) is far below anything a
+// float triangle test can resolve. The builders enlarge every cell by a
+// margin (see assignment_margin) that covers both this and the fuzz of the
+// float watertight test, so a triangle whose hit lies within rounding of a
+// cell is always listed in that cell.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "accel/core/aabb.h"
+#include "accel/grid/grid_resolution.h"
+
+namespace raylab {
+
+struct DdaGrid {
+  double lo[3] = {0, 0, 0};
+  double hi[3] = {0, 0, 0};
+  double cell[3] = {1, 1, 1};
+  double inv_cell[3] = {1, 1, 1};
+  int32_t res[3] = {1, 1, 1};
+  int64_t stride[3] = {1, 1, 1};  // linear cell index = x*stride[0] + y*stride[1] + z*stride[2]
+
+  uint64_t cells() const { return static_cast<uint64_t>(res[0]) * res[1] * res[2]; }
+
+  // Cell coordinate of x along `axis`, clamped into the grid.
+  int32_t coord(int axis, double x) const {
+    const double c = std::floor((x - lo[axis]) * inv_cell[axis]);
+    if (!(c >= 0.0)) return 0;  // also NaN
+    return c >= res[axis] ? res[axis] - 1 : static_cast<int32_t>(c);
+  }
+  double boundary(int axis, int64_t c) const { return lo[axis] + static_cast<double>(c) * cell[axis]; }
+  int64_t index(int32_t x, int32_t y, int32_t z) const { return x * stride[0] + y * stride[1] + z * stride[2]; }
+};
+
+// A grid with origin `lo`, cell sides `cell` (> 0) and resolution `res`.
+// Boundaries are lo + c * cell, so two grids made from the same lo and cell
+// (the builder's and the traversal's) agree exactly.
+inline DdaGrid make_dda_grid_from_cells(const double lo[3], const double cell[3], const int32_t res[3]) {
+  DdaGrid g;
+  for (int a = 0; a < 3; ++a) {
+    g.lo[a] = lo[a];
+    g.cell[a] = cell[a];
+    g.inv_cell[a] = 1.0 / cell[a];
+    g.res[a] = res[a];
+    g.hi[a] = lo[a] + static_cast<double>(res[a]) * cell[a];
+  }
+  g.stride[0] = 1;
+  g.stride[1] = res[0];
+  g.stride[2] = static_cast<int64_t>(res[0]) * res[1];
+  return g;
+}
+
+// A grid over [lo, hi] (hi > lo on every axis) with the given resolution.
+inline DdaGrid make_dda_grid(const Vec3d& lo, const Vec3d& hi, const GridRes& res) {
+  double cell[3];
+  for (int a = 0; a < 3; ++a) cell[a] = (hi[a] - lo[a]) / res[a];
+  return make_dda_grid_from_cells(lo.data(), cell, res.data());
+}
+
+// Enlargement of every cell when triangles are assigned to cells: 1/1000 of
+// a cell side, plus 16 float ulps of the grid's largest coordinate (the
+// watertight test works on float coordinates relative to the ray origin).
+inline constexpr double kCellMarginRelative = 1e-3;
+inline constexpr double kCellMarginUlps = 16.0 * 0x1p-23;
+
+inline Vec3d assignment_margin(const DdaGrid& g) {
+  double magnitude = 0.0;
+  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(g.lo[a]), std::fabs(g.hi[a])});
+  return Vec3d(kCellMarginRelative * g.cell[0], kCellMarginRelative * g.cell[1], kCellMarginRelative * g.cell[2])
+      .array() + kCellMarginUlps * magnitude;
+}
+
+// The box a grid is laid over: `bounds` padded on every side by 1e-5 of its
+// largest side (and a few ulps of its coordinates), so triangles on the
+// boundary lie inside and a flat side gets a non-zero thickness.
+inline void padded_grid_box(const Aabb& bounds, Vec3d& lo, Vec3d& hi) {
+  lo = bounds.lo.cast<double>();
+  hi = bounds.hi.cast<double>();
+  const double largest = (hi - lo).maxCoeff();
+  const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  const double pad = std::max({1e-5 * largest, 1e-6 * magnitude, 1e-30});
+  lo.array() -= pad;
+  hi.array() += pad;
+}
+
+}  // namespace raylab

@@ -1,0 +1,42 @@
+#pragma once
+// Settings shared by the three grids, parsed from their spec strings:
+//   density=1     lambda of the n^(1/3) rule (cells ~ lambda * triangles)
+//   res=AxBxC     explicit resolution (grid, hashgrid), overrides density
+//   budget=1024   memory budget in MiB; a larger request lowers lambda with
+//                 a warning on stderr instead of failing to allocate
+//   assign=exact  exact triangle/box overlap (SAT), or bbox
+//   tri=watertight triangle test (watertight or mt)
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accel/core/intersect_triangle.h"
+#include "accel/grid/cell_overlap.h"
+#include "accel/grid/grid_resolution.h"
+#include "accel/spec.h"
+
+namespace raylab {
+
+struct GridOptions {
+  double density = 1.0;
+  std::optional<GridRes> res;
+  double budget_mib = 1024.0;
+  AssignMode assign = AssignMode::Exact;
+  TriangleTest test = TriangleTest::Watertight;
+  double top_density = 1.0 / 16.0;  // two-level grid only
+
+  uint64_t budget_bytes() const { return static_cast<uint64_t>(budget_mib * 1024.0 * 1024.0); }
+};
+
+// Declared parameters; `with_res` adds res=, `with_top` adds top= (grid2).
+std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top);
+
+// Reads and checks the parameters; throws SpecError naming the bad one.
+GridOptions parse_grid_options(const std::string& owner, const Params& p, bool with_res, bool with_top);
+
+// The one warning printed when a budget lowers the requested density.
+void warn_budget_capped(const std::string& owner, const std::string& requested, const std::string& used,
+                        double budget_mib);
+
+}  // namespace raylab

@@ -1,0 +1,37 @@
+#pragma once
+// Per-ray mailbox (Amanatides & Woo 1987; Arnaldi, Priol & Bouatouch 1987):
+// a triangle listed in several cells is tested once per ray.
+//
+// Instead of a stamp per triangle shared by all rays (which needs a ray
+// counter per thread and memory proportional to the scene), each ray keeps
+// a small direct-mapped table of the ids it has tested, on the stack. It is
+// thread-safe by construction and needs no allocation; a collision only
+// evicts an older id, which can at worst cause one redundant test (the test
+// is exact, so answers never depend on the mailbox).
+#include <cstdint>
+
+#include "accel/core/hit.h"
+
+namespace raylab {
+
+class RayMailbox {
+ public:
+  static constexpr uint32_t kSlots = 64;  // power of two
+
+  RayMailbox() {
+    for (auto& s : slots_) s = kInvalidPrim;
+  }
+
+  // True when `prim` was already tested by this ray; otherwise records it.
+  bool seen(uint32_t prim) {
+    uint32_t& s = slots_[prim & (kSlots - 1)];
+    if (s == prim) return true;
+    s = prim;
+    return false;
+  }
+
+ private:
+  uint32_t slots_[kSlots];
+};
+
+}  // namespace raylab

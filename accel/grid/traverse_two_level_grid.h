@@ -1,0 +1,69 @@
+#pragma once
+// Nested 3D-DDA through a two-level grid: the outer walk visits top cells;
+// in a non-empty top cell the ray first tests the cell's large triangles,
+// then its part within the cell ([t_enter, t_exit], shortened to the
+// closest hit so far) is clipped to the sub-grid's box and walked by the
+// inner DDA. One mailbox and one closest hit serve both levels; the
+// stopping rule of grid_ray_query.h applies to the inner cells (the large
+// triangles of the top cell have been tested by then, and outside the
+// sub-grid's box the cell holds no other triangle) and again to the top
+// cell once its sub-grid is done.
+#include <cstdint>
+
+#include "accel/grid/dda.h"
+#include "accel/grid/grid_ray_query.h"
+#include "accel/grid/two_level_grid.h"
+
+namespace raylab {
+
+struct TwoLevelGridView {
+  DdaGrid top;
+  const uint32_t* top_cells = nullptr;
+  const TopCellContent* contents = nullptr;
+  const uint32_t* offsets = nullptr;
+  const uint32_t* refs = nullptr;
+  const GridTriangle* tris = nullptr;
+  bool empty = true;
+};
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
+  if constexpr (kCount) stats->rays++;
+  if (g.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return Hit{};
+  const DdaRay dr(ray);
+  double t0 = ray.tmin, t1 = ray.tmax;
+  if (!dda_clip(dr, g.top.lo, g.top.hi, t0, t1)) return Hit{};
+  GridRayQuery<kTest> q(ray);
+  dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) {
+    if constexpr (kCount) stats->nodes_visited++;
+    const uint32_t k = g.top_cells[top_cell];
+    if (k == kEmptyTopCell) return false;
+    const TopCellContent& content = g.contents[k];
+    if (content.large_count != 0 &&
+        q.template test_cell<kAnyHit, kCount>(g.refs + content.large_begin, content.large_count, g.tris, stats))
+      return true;
+    if (!content.has_subgrid()) {
+      if constexpr (kAnyHit) return false;
+      return q.done_at(t_exit);
+    }
+    const DdaGrid sub_dda = content.dda();
+    double s0 = t_enter, s1 = t_exit < q.tmax ? t_exit : static_cast<double>(q.tmax);
+    if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
+      const uint32_t* offsets = g.offsets + content.offsets_base;
+      const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) {
+        if constexpr (kCount) stats->nodes_visited++;
+        const uint32_t begin = offsets[cell], end = offsets[cell + 1];
+        if (begin == end) return false;
+        if (q.template test_cell<kAnyHit, kCount>(g.refs + begin, end - begin, g.tris, stats)) return true;
+        if constexpr (kAnyHit) return false;
+        return q.done_at(cell_exit);
+      });
+      if (stop) return true;
+    }
+    if constexpr (kAnyHit) return false;
+    return q.done_at(t_exit);
+  });
+  return q.hit;
+}
+
+}  // namespace raylab

@@ -1,0 +1,26 @@
+#pragma once
+// `grid`: a dense uniform grid over the scene's box, resolution by the
+// n^(1/3) rule (grid_resolution.h), cells in compressed-row form
+// (cell_lists.h), traversed by the 3D-DDA (traverse_uniform_grid.h).
+#include <vector>
+
+#include "accel/accelerator.h"
+#include "accel/grid/cell_lists.h"
+#include "accel/grid/dda_grid.h"
+#include "accel/grid/grid_options.h"
+#include "accel/grid/grid_triangles.h"
+
+namespace raylab {
+
+struct UniformGrid {
+  DdaGrid dda;
+  CellLists lists;
+  std::vector<GridTriangle> tris;
+  bool empty = true;  // no triangles: every ray misses
+};
+
+// Builds the grid within the options' memory budget (lowering the density,
+// with one warning, when needed). Fills `stats` except build_ms.
+UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& options, BuildStats& stats);
+
+}  // namespace raylab

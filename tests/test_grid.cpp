@@ -1,0 +1,878 @@
+// Grids (issue 3): the resolution rule, the triangle/box overlap test, cell
+// assignment, the 3D-DDA's corner cases, and grid / hashgrid / grid2 against
+// the brute-force reference and Embree on Cornell, soups, a flat scene, a
+// teapot in a stadium and the shared meshes; memory budget and bad specs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include "accel/grid/cell_overlap.h"
+#include "accel/grid/dda.h"
+#include "accel/grid/grid_resolution.h"
+#include "accel/grid/hash_grid.h"
+#include "accel/grid/tri_box_overlap.h"
+#include "accel/grid/two_level_grid.h"
+#include "accel/grid/uniform_grid.h"
+#include "accel/registry.h"
+#include "bench/verify.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_registry.h"
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// ---------------------------------------------------------------------------
+// Scenes built here
+
+Scene scene_from_mesh(std::string name, TriangleMesh mesh) {
+  Scene s;
+  s.name = std::move(name);
+  s.mesh = std::move(mesh);
+  s.materials = {Material{}};
+  s.material_ids.assign(s.mesh.num_triangles(), 0);
+  s.view = frame_bounds(s.mesh.bounds());
+  s.background = Vec3f::Constant(1.0f);
+  return s;
+}
+
+void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const auto base = static_cast<uint32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), {a, b, c});
+  m.triangles.push_back({base, base + 1, base + 2});
+}
+
+// All triangles in the plane z = 0.5: a tessellated square plus random
+// small triangles lying in the same plane (overlapping ones included).
+TriangleMesh make_flat_scene(int tiles, size_t extra, uint64_t seed) {
+  TriangleMesh m;
+  const float z = 0.5f;
+  for (int i = 0; i < tiles; ++i)
+    for (int j = 0; j < tiles; ++j) {
+      const float x0 = static_cast<float>(i) / tiles, x1 = static_cast<float>(i + 1) / tiles;
+      const float y0 = static_cast<float>(j) / tiles, y1 = static_cast<float>(j + 1) / tiles;
+      add_triangle(m, {x0, y0, z}, {x1, y0, z}, {x1, y1, z});
+      add_triangle(m, {x0, y0, z}, {x1, y1, z}, {x0, y1, z});
+    }
+  Pcg32 rng(seed, 5);
+  for (size_t i = 0; i < extra; ++i) {
+    const Vec3f c(rng.uniform(), rng.uniform(), z);
+    add_triangle(m, c, c + Vec3f(0.05f * rng.uniform(), 0.01f, 0), c + Vec3f(0.01f, 0.05f * rng.uniform(), 0));
+  }
+  return m;
+}
+
+// "Teapot in a stadium": a closed room 1000 units wide (floor tessellated,
+// walls and ceiling as big triangles) around a dense sphere of diameter 1
+// (about 8,000 triangles), 1000x smaller than the room, resting on a huge
+// table top that crosses its cell.
+TriangleMesh make_stadium_scene() {
+  TriangleMesh m;
+  const float h = 500.0f;
+  const Vec3f c[8] = {{-h, -h, -h}, {h, -h, -h}, {h, h, -h}, {-h, h, -h},
+                      {-h, -h, h},  {h, -h, h},  {h, h, h},  {-h, h, h}};
+  auto quad = [&](int a, int b, int cc, int d) {
+    add_triangle(m, c[a], c[b], c[cc]);
+    add_triangle(m, c[a], c[cc], c[d]);
+  };
+  quad(0, 1, 5, 4);  // y = -h
+  quad(3, 7, 6, 2);  // y = +h
+  quad(0, 4, 7, 3);  // x = -h
+  quad(1, 2, 6, 5);  // x = +h
+  quad(4, 5, 6, 7);  // z = +h
+  // Floor z = -h as a 20x20 tiling.
+  const int n = 20;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const float x0 = -h + 2 * h * i / n, x1 = -h + 2 * h * (i + 1) / n;
+      const float y0 = -h + 2 * h * j / n, y1 = -h + 2 * h * (j + 1) / n;
+      add_triangle(m, {x0, y0, -h}, {x1, y1, -h}, {x1, y0, -h});
+      add_triangle(m, {x0, y0, -h}, {x0, y1, -h}, {x1, y1, -h});
+    }
+  add_triangle(m, {-300, -300, 0.99f}, {300, -300, 0.99f}, {0, 300, 0.99f});
+  m.append(make_uv_sphere(90, 45, Vec3f(3.0f, -2.0f, 1.5f), 0.5f));
+  return m;
+}
+
+const Vec3f kStadiumObject(3.0f, -2.0f, 1.5f);
+
+// ---------------------------------------------------------------------------
+// Comparing an accelerator with the brute-force reference (same watertight
+// test, so answers must agree up to exact ties).
+
+struct Mismatches {
+  size_t closest = 0, occlusion = 0, rays = 0;
+};
+
+std::vector<Hit> brute_hits(const TriangleMesh& mesh, const std::vector<Ray>& rays) {
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  std::vector<Hit> hits(rays.size());
+  brute->intersect(rays, hits);
+  return hits;
+}
+
+Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays,
+                              const std::vector<Hit>& b) {
+  auto accel = make_accelerator(spec);
+  accel->build(mesh);
+  std::vector<Hit> a(rays.size());
+  std::vector<uint8_t> occ(rays.size());
+  accel->intersect(rays, a);
+  accel->occluded(rays, occ);
+  Mismatches m;
+  m.rays = rays.size();
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const bool same = a[i].valid() == b[i].valid() &&
+                      (!a[i].valid() || a[i].prim == b[i].prim || std::fabs(a[i].t - b[i].t) <= 1e-6f * b[i].t);
+    if (!same) {
+      if (m.closest < 5)
+        ADD_FAILURE() << spec << " ray " << i << " org " << rays[i].org.transpose() << " dir "
+                      << rays[i].dir.transpose() << " [" << rays[i].tmin << ", " << rays[i].tmax << "]: got prim "
+                      << a[i].prim << " t " << a[i].t << ", brute prim " << b[i].prim << " t " << b[i].t;
+      ++m.closest;
+    }
+    if (static_cast<bool>(occ[i]) != b[i].valid()) ++m.occlusion;
+  }
+  return m;
+}
+
+Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays) {
+  return compare_with_brute(mesh, spec, rays, brute_hits(mesh, rays));
+}
+
+// Random rays: half from random points in the (enlarged) bounds in random
+// directions, half aimed at random triangles' interiors, edges and vertices.
+std::vector<Ray> make_test_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
+  Pcg32 rng(seed, 11);
+  const Aabb b = mesh.bounds();
+  const Vec3f d = b.diagonal();
+  std::vector<Ray> rays;
+  for (size_t i = 0; i < count; ++i) {
+    const Vec3f org = b.lo - 0.1f * d + Vec3f(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(1.2f * d);
+    if (i % 2 == 0 || mesh.num_triangles() == 0) {
+      rays.emplace_back(org, test::random_direction(rng));
+    } else {
+      const size_t t = rng.next() % mesh.num_triangles();
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      if (i % 6 == 1) v = 0;          // on an edge
+      if (i % 12 == 3) u = v = 0;     // on a vertex
+      const Vec3f target = (1 - u - v) * mesh.vertex(t, 0) + u * mesh.vertex(t, 1) + v * mesh.vertex(t, 2);
+      const Vec3f dir = target - org;
+      if (dir.squaredNorm() > 0) rays.emplace_back(org, dir.normalized());
+    }
+  }
+  return rays;
+}
+
+const std::vector<std::string> kGridSpecs = {"grid", "hashgrid", "grid2", "grid:assign=bbox", "hashgrid:density=4",
+                                             "grid2:top=1,density=2", "grid:res=7x3x5"};
+
+void expect_all_agree(const TriangleMesh& mesh, const std::vector<Ray>& rays, const std::string& what) {
+  const std::vector<Hit> reference = brute_hits(mesh, rays);
+  for (const auto& spec : kGridSpecs) {
+    const Mismatches m = compare_with_brute(mesh, spec, rays, reference);
+    EXPECT_EQ(m.closest, 0u) << spec << " on " << what << " (" << m.rays << " rays)";
+    EXPECT_EQ(m.occlusion, 0u) << spec << " on " << what;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Resolution rule
+
+TEST(GridResolution, RuleGivesAboutLambdaNCubicCells) {
+  // Cubic cells: V = 8, s = (8 / 8000)^(1/3) = 0.1 -> 40x20x10 = 8000 cells.
+  const GridRes r = resolution_by_density(Vec3d(4, 2, 1), 8000, 1.0);
+  EXPECT_EQ(r, (GridRes{40, 20, 10}));
+  const GridRes r8 = resolution_by_density(Vec3d(4, 2, 1), 8000, 8.0);
+  EXPECT_EQ(r8, (GridRes{80, 40, 20}));
+  const GridRes small = resolution_by_density(Vec3d(1, 1, 1), 1000, 0.125);
+  EXPECT_EQ(small, (GridRes{5, 5, 5}));
+}
+
+TEST(GridResolution, FlatLineAndPointBoxesNeverDivideByZero) {
+  EXPECT_EQ(resolution_by_density(Vec3d(1, 1, 0), 100, 1.0), (GridRes{10, 10, 1}));
+  EXPECT_EQ(resolution_by_density(Vec3d(0, 2, 1), 200, 1.0), (GridRes{1, 20, 10}));
+  EXPECT_EQ(resolution_by_density(Vec3d(5, 0, 0), 50, 1.0), (GridRes{50, 1, 1}));
+  EXPECT_EQ(resolution_by_density(Vec3d(0, 0, 0), 1000, 1.0), (GridRes{1, 1, 1}));
+  EXPECT_EQ(resolution_by_density(Vec3d(1, 1, 1), 0, 1.0), (GridRes{1, 1, 1}));
+  // A nearly flat box: the thin side is shorter than a cell and gets one.
+  const GridRes thin = resolution_by_density(Vec3d(1, 1, 1e-6), 10000, 1.0);
+  EXPECT_EQ(thin, (GridRes{100, 100, 1}));
+}
+
+TEST(GridResolution, BudgetLowersLambda) {
+  const ChosenResolution c = choose_resolution(Vec3d(1, 1, 1), 1e6, 8.0, 100000);
+  EXPECT_TRUE(c.capped);
+  EXPECT_LE(total_cells(c.res), 100000u);
+  EXPECT_GT(total_cells(c.res), 50000u);  // lowered to about the budget, not far below
+  EXPECT_LT(c.lambda, 8.0);
+  const ChosenResolution free = choose_resolution(Vec3d(1, 1, 1), 1000, 1.0, 1u << 20);
+  EXPECT_FALSE(free.capped);
+  EXPECT_EQ(free.lambda, 1.0);
+  const ChosenResolution r = cap_resolution(GridRes{1000, 1000, 1000}, 1000000);
+  EXPECT_TRUE(r.capped);
+  EXPECT_LE(total_cells(r.res), 1000000u);
+  EXPECT_GE(total_cells(r.res), 500000u);
+}
+
+TEST(GridResolution, ParsesAndRejectsResolutionStrings) {
+  EXPECT_EQ(parse_grid_resolution("64x64x32"), (GridRes{64, 64, 32}));
+  EXPECT_EQ(parse_grid_resolution("1X2x3"), (GridRes{1, 2, 3}));
+  for (const char* bad : {"64x64", "0x1x1", "axbxc", "64x64x32x2", "-1x2x3", "2000000x1x1", "", "4x4x", "4 x4x4"})
+    EXPECT_THROW(parse_grid_resolution(bad), SpecError) << bad;
+}
+
+// ---------------------------------------------------------------------------
+// Triangle/box overlap and cell assignment
+
+TEST(TriangleBoxOverlap, SeparatingAxisCases) {
+  const Vec3d lo(0, 0, 0), hi(1, 1, 1);
+  // All vertices outside, the triangle slices through the box.
+  EXPECT_TRUE(triangle_box_overlap(lo, hi, {-5, -5, 0.5}, {5, -5, 0.5}, {0, 5, 0.5}));
+  // Touching a face counts as overlap.
+  EXPECT_TRUE(triangle_box_overlap(lo, hi, {1, 0.2, 0.2}, {2, 0.2, 0.8}, {1, 0.8, 0.5}));
+  // Separated along a box normal (the bounds do not overlap in x).
+  EXPECT_FALSE(triangle_box_overlap(lo, hi, {1.4, 1.4, -1}, {1.4, 1.4, 3}, {3, -1, 1}));
+  // Bounds overlap, but the plane x+y+z = 3.1 passes beyond the corner (1,1,1).
+  EXPECT_FALSE(triangle_box_overlap(lo, hi, {3.1, 0, 0}, {0, 3.1, 0}, {0, 0, 3.1}));
+  // The plane x+y+z = 2.5 cuts off the corner and the triangle contains (5/6, 5/6, 5/6).
+  EXPECT_TRUE(triangle_box_overlap(lo, hi, {2.5, 0, 0}, {0, 2.5, 0}, {0, 0, 2.5}));
+  // Edge-axis separation: bounds overlap and the plane z = 0.5 cuts the box,
+  // but the triangle lies beyond x + y = 3.3; only the axis edge x z-normal
+  // (proportional to (1, 1, 0)) separates it.
+  EXPECT_FALSE(triangle_box_overlap(lo, hi, {0.8, 2.5, 0.5}, {2.5, 0.8, 0.5}, {2.5, 2.5, 0.5}));
+  // The same triangle moved until its hypotenuse passes through the box.
+  EXPECT_TRUE(triangle_box_overlap(lo, hi, {0.2, 1.6, 0.5}, {1.6, 0.2, 0.5}, {2.5, 2.5, 0.5}));
+  // A degenerate triangle (segment) through the box, and a point outside.
+  EXPECT_TRUE(triangle_box_overlap(lo, hi, {-1, 0.5, 0.5}, {2, 0.5, 0.5}, {0.5, 0.5, 0.5}));
+  EXPECT_FALSE(triangle_box_overlap(lo, hi, {2, 2, 2}, {2, 2, 2}, {2, 2, 2}));
+}
+
+// Reference: clip the triangle polygon against the box's six planes
+// (Sutherland-Hodgman); the triangle overlaps when something is left.
+bool clip_overlap(const Vec3d& lo, const Vec3d& hi, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  std::vector<Vec3d> poly = {a, b, c};
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      std::vector<Vec3d> out;
+      auto inside = [&](const Vec3d& p) { return side == 0 ? p[axis] >= lo[axis] : p[axis] <= hi[axis]; };
+      const double plane = side == 0 ? lo[axis] : hi[axis];
+      for (size_t i = 0; i < poly.size(); ++i) {
+        const Vec3d& p = poly[i];
+        const Vec3d& q = poly[(i + 1) % poly.size()];
+        if (inside(p)) out.push_back(p);
+        if (inside(p) != inside(q)) {
+          const double t = (plane - p[axis]) / (q[axis] - p[axis]);
+          Vec3d x = p + t * (q - p);
+          x[axis] = plane;
+          out.push_back(x);
+        }
+      }
+      poly = std::move(out);
+      if (poly.empty()) return false;
+    }
+  return true;
+}
+
+TEST(TriangleBoxOverlap, AgreesWithPolygonClippingOnRandomTriangles) {
+  Pcg32 rng(3, 7);
+  const Vec3d lo(0, 0, 0), hi(1, 1, 1);
+  size_t overlaps = 0, checked = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3d v[3];
+    const Vec3d c(3 * rng.uniform() - 1, 3 * rng.uniform() - 1, 3 * rng.uniform() - 1);
+    for (auto& p : v) p = c + Vec3d(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 2.0;
+    const bool sat = triangle_box_overlap(lo, hi, v[0], v[1], v[2]);
+    // Decided cases only: the answer must not change under a tiny shrink/grow.
+    const double e = 1e-9;
+    const bool grown = clip_overlap(lo.array() - e, hi.array() + e, v[0], v[1], v[2]);
+    const bool shrunk = clip_overlap(lo.array() + e, hi.array() - e, v[0], v[1], v[2]);
+    if (grown != shrunk) continue;
+    ++checked;
+    overlaps += sat;
+    EXPECT_EQ(sat, grown) << "triangle " << i;
+  }
+  EXPECT_GT(checked, 19000u);
+  EXPECT_GT(overlaps, 2000u);  // both outcomes are exercised
+  EXPECT_LT(overlaps, checked - 2000u);
+}
+
+TEST(CellAssignment, ExactCellsEqualBruteForceSatAndAreWithinBbox) {
+  const DdaGrid g = make_dda_grid(Vec3d(0, 0, 0), Vec3d(1, 2, 1), GridRes{12, 9, 16});
+  Pcg32 rng(9, 1);
+  size_t bbox_total = 0, exact_total = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Vec3f c(rng.uniform(), 2 * rng.uniform(), rng.uniform());
+    const float s = (i % 10 == 0) ? 1.5f : 0.3f;  // some triangles span many cells
+    const Vec3f p0 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+    const Vec3f p1 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+    const Vec3f p2 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+    std::set<std::tuple<int, int, int>> exact, bbox, brute;
+    for_each_assigned_cell(g, AssignMode::Exact, p0, p1, p2, [&](int x, int y, int z) {
+      EXPECT_TRUE(exact.insert({x, y, z}).second) << "cell listed twice";
+    });
+    for_each_assigned_cell(g, AssignMode::Bbox, p0, p1, p2, [&](int x, int y, int z) { bbox.insert({x, y, z}); });
+    const Vec3d margin = assignment_margin(g);
+    for (int z = 0; z < g.res[2]; ++z)
+      for (int y = 0; y < g.res[1]; ++y)
+        for (int x = 0; x < g.res[0]; ++x) {
+          const Vec3d lo(g.boundary(0, x) - margin[0], g.boundary(1, y) - margin[1], g.boundary(2, z) - margin[2]);
+          const Vec3d hi(g.boundary(0, x + 1) + margin[0], g.boundary(1, y + 1) + margin[1],
+                         g.boundary(2, z + 1) + margin[2]);
+          if (triangle_box_overlap(lo, hi, p0.cast<double>(), p1.cast<double>(), p2.cast<double>()))
+            brute.insert({x, y, z});
+        }
+    EXPECT_EQ(exact, brute) << "triangle " << i;
+    EXPECT_TRUE(std::includes(bbox.begin(), bbox.end(), exact.begin(), exact.end()));
+    bbox_total += bbox.size();
+    exact_total += exact.size();
+  }
+  EXPECT_LT(exact_total, bbox_total);  // the exact test does drop cells
+}
+
+// ---------------------------------------------------------------------------
+// 3D-DDA on its own
+
+struct Visit {
+  int64_t cell;
+  double t_enter, t_exit;
+};
+
+std::vector<Visit> walk(const DdaGrid& g, const Ray& r) {
+  std::vector<Visit> out;
+  const DdaRay dr(r);
+  double t0 = r.tmin, t1 = r.tmax;
+  if (!dda_clip(dr, g.lo, g.hi, t0, t1)) return out;
+  dda_walk(g, dr, t0, t1, [&](int64_t c, double te, double tx) {
+    out.push_back({c, te, tx});
+    return false;
+  });
+  return out;
+}
+
+std::tuple<int, int, int> coords(const DdaGrid& g, int64_t c) {
+  return {static_cast<int>(c % g.res[0]), static_cast<int>((c / g.res[0]) % g.res[1]),
+          static_cast<int>(c / (static_cast<int64_t>(g.res[0]) * g.res[1]))};
+}
+
+// Checks the walk's invariants and returns the cells visited for a positive length.
+std::vector<int64_t> check_walk(const DdaGrid& g, const Ray& r, const std::vector<Visit>& v) {
+  std::vector<int64_t> cells;
+  for (size_t i = 0; i < v.size(); ++i) {
+    EXPECT_LE(v[i].t_enter, v[i].t_exit + 1e-12) << "visit " << i;
+    if (i > 0) {
+      EXPECT_EQ(v[i].t_enter, v[i - 1].t_exit) << "visit " << i;
+      const auto [x0, y0, z0] = coords(g, v[i - 1].cell);
+      const auto [x1, y1, z1] = coords(g, v[i].cell);
+      EXPECT_EQ(std::abs(x1 - x0) + std::abs(y1 - y0) + std::abs(z1 - z0), 1) << "not face-adjacent at " << i;
+    }
+    if (v[i].t_exit > v[i].t_enter) cells.push_back(v[i].cell);
+    // The middle of the visited interval lies in the visited cell.
+    if (v[i].t_exit > v[i].t_enter && std::isfinite(v[i].t_exit)) {
+      const double tm = 0.5 * (v[i].t_enter + v[i].t_exit);
+      const auto [x, y, z] = coords(g, v[i].cell);
+      const int c[3] = {x, y, z};
+      for (int a = 0; a < 3; ++a) {
+        const double p = static_cast<double>(r.org[a]) + tm * static_cast<double>(r.dir[a]);
+        EXPECT_GE(p, g.boundary(a, c[a]) - 1e-9) << "visit " << i << " axis " << a;
+        EXPECT_LE(p, g.boundary(a, c[a] + 1) + 1e-9) << "visit " << i << " axis " << a;
+      }
+    }
+  }
+  return cells;
+}
+
+const DdaGrid kUnitGrid = make_dda_grid(Vec3d(0, 0, 0), Vec3d(4, 4, 4), GridRes{4, 4, 4});
+
+TEST(Dda, AxisParallelRayVisitsItsRowInOrder) {
+  const auto v = walk(kUnitGrid, Ray(Vec3f(-1, 1.5f, 2.5f), Vec3f(1, 0, 0)));
+  const auto cells = check_walk(kUnitGrid, Ray(Vec3f(-1, 1.5f, 2.5f), Vec3f(1, 0, 0)), v);
+  ASSERT_EQ(cells.size(), 4u);
+  for (int x = 0; x < 4; ++x) EXPECT_EQ(cells[x], kUnitGrid.index(x, 1, 2));
+  EXPECT_DOUBLE_EQ(v.front().t_enter, 1.0);
+  EXPECT_DOUBLE_EQ(v.back().t_exit, 5.0);
+  // Backwards along -y.
+  const Ray back(Vec3f(0.5f, 10, 3.5f), Vec3f(0, -2, 0));
+  const auto cb = check_walk(kUnitGrid, back, walk(kUnitGrid, back));
+  ASSERT_EQ(cb.size(), 4u);
+  for (int y = 0; y < 4; ++y) EXPECT_EQ(cb[y], kUnitGrid.index(0, 3 - y, 3));
+}
+
+TEST(Dda, PlusAndMinusZeroComponentsWalkTheSameCells) {
+  for (const float zero : {0.0f, -0.0f}) {
+    const Ray r(Vec3f(-1, 2.5f, 0.5f), Vec3f(1, zero, zero));
+    const auto cells = check_walk(kUnitGrid, r, walk(kUnitGrid, r));
+    ASSERT_EQ(cells.size(), 4u) << "zero sign " << std::signbit(zero);
+    for (int x = 0; x < 4; ++x) EXPECT_EQ(cells[x], kUnitGrid.index(x, 2, 0));
+    const Ray r2(Vec3f(1.5f, 1.5f, 7), Vec3f(zero, zero, -1));
+    const auto c2 = check_walk(kUnitGrid, r2, walk(kUnitGrid, r2));
+    ASSERT_EQ(c2.size(), 4u);
+    EXPECT_EQ(c2.front(), kUnitGrid.index(1, 1, 3));
+  }
+}
+
+TEST(Dda, OriginsExactlyOnCellBoundaries) {
+  // Starting on the plane x = 2 going +x: first cell with length is x = 2.
+  const Ray fwd(Vec3f(2, 0.5f, 0.5f), Vec3f(1, 0, 0));
+  auto cells = check_walk(kUnitGrid, fwd, walk(kUnitGrid, fwd));
+  ASSERT_EQ(cells.size(), 2u);
+  EXPECT_EQ(cells[0], kUnitGrid.index(2, 0, 0));
+  // The same origin going -x: cells 1 and 0.
+  const Ray bwd(Vec3f(2, 0.5f, 0.5f), Vec3f(-1, 0, 0));
+  cells = check_walk(kUnitGrid, bwd, walk(kUnitGrid, bwd));
+  ASSERT_EQ(cells.size(), 2u);
+  EXPECT_EQ(cells[0], kUnitGrid.index(1, 0, 0));
+  EXPECT_EQ(cells[1], kUnitGrid.index(0, 0, 0));
+  // On a corner of cells going diagonally: 6-connected steps through corners.
+  const Ray diag(Vec3f(1, 1, 1), Vec3f(1, 1, 1));
+  const auto v = walk(kUnitGrid, diag);
+  cells = check_walk(kUnitGrid, diag, v);
+  ASSERT_EQ(cells.size(), 3u);
+  EXPECT_EQ(cells[0], kUnitGrid.index(1, 1, 1));
+  EXPECT_EQ(cells[1], kUnitGrid.index(2, 2, 2));
+  EXPECT_EQ(cells[2], kUnitGrid.index(3, 3, 3));
+  // A ray lying in the boundary plane y = 2 (zero y direction) stays in one row.
+  const Ray plane(Vec3f(-1, 2, 0.5f), Vec3f(1, 0, 0));
+  cells = check_walk(kUnitGrid, plane, walk(kUnitGrid, plane));
+  ASSERT_EQ(cells.size(), 4u);
+  // On the outer boundary of the grid (x = 4 exactly, going -x) starts inside.
+  const Ray edge(Vec3f(4, 3.5f, 3.5f), Vec3f(-1, 0, 0));
+  cells = check_walk(kUnitGrid, edge, walk(kUnitGrid, edge));
+  ASSERT_EQ(cells.size(), 4u);
+  EXPECT_EQ(cells[0], kUnitGrid.index(3, 3, 3));
+}
+
+TEST(Dda, RaysMissingThePointingAwayOrOutsideTheWindow) {
+  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 5, 2), Vec3f(1, 0, 0))).empty());       // beside the grid
+  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(-1, 0, 0))).empty());      // pointing away
+  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(1, 0, 0), 0, 0.5f)).empty());  // tmax before entry
+  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(1, 0, 0), 6, kInf)).empty());  // tmin after exit
+  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, -1, 2), Vec3f(1, 0.01f, 0))).empty());  // passes below
+}
+
+TEST(Dda, TminTmaxWindowLimitsTheCells) {
+  const Ray r(Vec3f(-1, 0.5f, 0.5f), Vec3f(1, 0, 0), 2.5f, 3.5f);  // x in [1.5, 2.5]
+  const auto v = walk(kUnitGrid, r);
+  const auto cells = check_walk(kUnitGrid, r, v);
+  ASSERT_EQ(cells.size(), 2u);
+  EXPECT_EQ(cells[0], kUnitGrid.index(1, 0, 0));
+  EXPECT_EQ(cells[1], kUnitGrid.index(2, 0, 0));
+  EXPECT_DOUBLE_EQ(v.front().t_enter, 2.5);
+  EXPECT_DOUBLE_EQ(v.back().t_exit, 3.5);
+  // Starting inside the grid (tmin = 0 inside): the first cell is the origin's.
+  const Ray in(Vec3f(2.5f, 1.5f, 0.5f), Vec3f(-1, 1, 0));
+  const auto ci = check_walk(kUnitGrid, in, walk(kUnitGrid, in));
+  ASSERT_FALSE(ci.empty());
+  EXPECT_EQ(ci.front(), kUnitGrid.index(2, 1, 0));
+}
+
+TEST(Dda, RandomRaysVisitEveryCellTheyCross) {
+  const DdaGrid g = make_dda_grid(Vec3d(-1, 0, 2), Vec3d(2, 1, 2.5), GridRes{13, 7, 5});
+  Pcg32 rng(21, 3);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f org(-2 + 5 * rng.uniform(), -1 + 3 * rng.uniform(), 1.5f + 1.5f * rng.uniform());
+    Vec3f dir = test::random_direction(rng);
+    if (i % 5 == 0) dir[i % 3] = (i % 2) ? 0.0f : -0.0f;
+    if (dir.squaredNorm() == 0) continue;
+    const Ray r(org, dir);
+    const auto v = walk(g, r);
+    const auto cells = check_walk(g, r, v);
+    // Reference: sample the segment densely; every sampled point's cell must
+    // be among the visited ones.
+    const DdaRay dr(r);
+    double t0 = r.tmin, t1 = r.tmax;
+    if (!dda_clip(dr, g.lo, g.hi, t0, t1)) {
+      EXPECT_TRUE(v.empty());
+      continue;
+    }
+    const std::set<int64_t> visited(cells.begin(), cells.end());
+    for (int k = 1; k < 200; ++k) {
+      const double t = t0 + (t1 - t0) * k / 200.0;
+      int c[3];
+      bool on_boundary = false;
+      for (int a = 0; a < 3; ++a) {
+        const double p = dr.org[a] + t * dr.dir[a];
+        const double f = (p - g.lo[a]) * g.inv_cell[a];
+        on_boundary |= std::fabs(f - std::round(f)) < 1e-9;
+        c[a] = g.coord(a, p);
+      }
+      if (on_boundary) continue;
+      EXPECT_TRUE(visited.count(g.index(c[0], c[1], c[2]))) << "ray " << i << " sample " << k;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Accelerators against brute force
+
+TEST(GridAccel, CornellBoxAgreesWithBrute) {
+  const Scene s = load_scene("cornell");
+  expect_all_agree(s.mesh, make_test_rays(s.mesh, 4000, 1), "cornell");
+}
+
+TEST(GridAccel, RandomSoupsAgreeWithBrute) {
+  for (const auto& [n, size, seed] : {std::tuple{2000, 1.0f, 1}, std::tuple{5000, 4.0f, 2}, std::tuple{300, 20.0f, 3}}) {
+    const Scene s = make_triangle_soup(n, seed, size);
+    expect_all_agree(s.mesh, make_test_rays(s.mesh, 3000, seed), s.name);
+  }
+}
+
+TEST(GridAccel, AxisAlignedFlatSceneAgreesWithBrute) {
+  const TriangleMesh m = make_flat_scene(16, 400, 4);
+  std::vector<Ray> rays = make_test_rays(m, 3000, 5);
+  // Rays parallel to the plane, in it, and through it along +-z exactly.
+  Pcg32 rng(6, 2);
+  for (int i = 0; i < 500; ++i) {
+    const float x = rng.uniform(), y = rng.uniform();
+    rays.emplace_back(Vec3f(x, y, 2.0f), Vec3f(0.0f, -0.0f, -1.0f));
+    rays.emplace_back(Vec3f(x, y, -1.0f), Vec3f(-0.0f, 0.0f, 1.0f));
+    rays.emplace_back(Vec3f(-1, y, 0.5f), Vec3f(1, 0, 0));           // in the plane
+    rays.emplace_back(Vec3f(x, y, 0.6f), Vec3f(1, rng.uniform(), 0));  // parallel above
+  }
+  expect_all_agree(m, rays, "flat scene");
+  // And the plane is really hit from both sides.
+  auto g = make_accelerator("grid");
+  g->build(m);
+  const Hit h = g->intersect1(Ray(Vec3f(0.3f, 0.3f, 2.0f), Vec3f(0, 0, -1)));
+  ASSERT_TRUE(h.valid());
+  EXPECT_FLOAT_EQ(h.t, 1.5f);
+}
+
+TEST(GridAccel, TeapotInAStadiumAgreesWithBrute) {
+  const TriangleMesh m = make_stadium_scene();
+  std::vector<Ray> rays = make_test_rays(m, 2000, 7);
+  // Rays from around the room aimed at the small dense object.
+  Pcg32 rng(8, 4);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f org(800 * rng.uniform() - 400, 800 * rng.uniform() - 400, 800 * rng.uniform() - 400);
+    const Vec3f target = kStadiumObject + 0.6f * test::random_direction(rng);
+    rays.emplace_back(org, (target - org).normalized());
+  }
+  const std::vector<Hit> reference = brute_hits(m, rays);
+  for (const auto& spec : {"grid", "hashgrid", "grid2", "grid2:top=0.01"}) {
+    const Mismatches mm = compare_with_brute(m, spec, rays, reference);
+    EXPECT_EQ(mm.closest, 0u) << spec;
+    EXPECT_EQ(mm.occlusion, 0u) << spec;
+  }
+}
+
+TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
+  // Counted work, not time: rays aimed at the dense object test far fewer
+  // triangles in grid2, whose sub-grid adapts to the object.
+  const TriangleMesh m = make_stadium_scene();
+  std::vector<Ray> rays;
+  Pcg32 rng(9, 4);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f org = kStadiumObject + Vec3f(0, 0, 0) + 20.0f * test::random_direction(rng);
+    const Vec3f target = kStadiumObject + 0.5f * test::random_direction(rng);
+    rays.emplace_back(org, (target - org).normalized());
+  }
+  auto tests_per_ray = [&](const std::string& spec) {
+    auto a = make_accelerator(spec);
+    a->build(m);
+    std::vector<Hit> hits(rays.size());
+    TraversalStats st;
+    a->intersect(rays, hits, &st);
+    EXPECT_EQ(st.rays, rays.size());
+    size_t hit_count = 0;
+    for (const Hit& h : hits) hit_count += h.valid();
+    EXPECT_EQ(hit_count, rays.size()) << spec;  // every ray hits the object or the room
+    return static_cast<double>(st.triangle_tests) / static_cast<double>(st.rays);
+  };
+  const double grid = tests_per_ray("grid");
+  const double grid2 = tests_per_ray("grid2");
+  auto two = make_accelerator("grid2");
+  const BuildStats st = two->build(m);
+  EXPECT_GT(st.extra.at("large_refs"), 0.0);  // the walls and the table top stay at the top level
+  EXPECT_GT(st.extra.at("subgrids"), 0.0);
+  EXPECT_GT(grid, 500.0);           // the single grid collapses: the object sits in a few cells
+  EXPECT_LT(grid2 * 10.0, grid);    // the two-level grid does not
+  EXPECT_LT(grid2, 50.0);
+}
+
+TEST(GridAccel, HitFarAlongASpanningTriangleWaitsForNearerCells) {
+  // T is nearly parallel to the ray and listed in every cell the ray walks;
+  // its hit at x = 9 is found in the first cell and must not be accepted
+  // there: the small triangle S at x = 5 is nearer.
+  TriangleMesh m;
+  add_triangle(m, {0, 0, 0.59f}, {0, 1, 0.59f}, {10, 0.5f, 0.49f});  // T, id 0
+  add_triangle(m, {5, 0.3f, 0.3f}, {5, 0.7f, 0.3f}, {5, 0.5f, 0.7f});  // S, id 1
+  add_triangle(m, {0, 0, 0}, {10, 0, 0}, {10, 1, 1});                 // grows the box, id 2
+  const Ray r(Vec3f(-0.5f, 0.5f, 0.5f), Vec3f(1, 0, 0));
+  for (const auto& spec : {"grid:res=10x1x1", "hashgrid:res=10x1x1", "grid2:top=1,density=1", "grid", "grid:res=40x3x3"}) {
+    auto a = make_accelerator(spec);
+    a->build(m);
+    const Hit h = a->intersect1(r);
+    ASSERT_TRUE(h.valid()) << spec;
+    EXPECT_EQ(h.prim, 1u) << spec;
+    EXPECT_FLOAT_EQ(h.t, 5.5f) << spec;
+    // Without S the far hit on T is found (the mailbox must not lose it).
+    TriangleMesh m2 = m;
+    m2.triangles.erase(m2.triangles.begin() + 1);
+    auto b = make_accelerator(spec);
+    b->build(m2);
+    const Hit h2 = b->intersect1(r);
+    ASSERT_TRUE(h2.valid()) << spec;
+    EXPECT_EQ(h2.prim, 0u) << spec;
+    EXPECT_NEAR(h2.t, 9.5f, 1e-4f) << spec;
+  }
+}
+
+TEST(GridAccel, TminTmaxWindowsAndStartingInside) {
+  TriangleMesh m;
+  for (int i = 0; i < 5; ++i) {
+    const float x = 1.0f + i;
+    add_triangle(m, {x, -1, -1}, {x, 3, -1}, {x, -1, 3});  // planes x = 1..5 covering y,z in [0,1]
+  }
+  for (const auto& spec : {"grid", "hashgrid", "grid2", "grid:res=3x2x2"}) {
+    auto a = make_accelerator(spec);
+    a->build(m);
+    const Vec3f dir(1, 0, 0);
+    const Vec3f org(0, 0.25f, 0.25f);
+    EXPECT_EQ(a->intersect1(Ray(org, dir)).prim, 0u) << spec;
+    EXPECT_EQ(a->intersect1(Ray(org, dir, 1.5f)).prim, 1u) << spec;          // tmin skips x = 1
+    EXPECT_EQ(a->intersect1(Ray(org, dir, 2.0f)).prim, 1u) << spec;          // tmin exactly at x = 2
+    EXPECT_FALSE(a->intersect1(Ray(org, dir, 0.0f, 0.99f)).valid()) << spec;  // tmax before x = 1
+    EXPECT_EQ(a->intersect1(Ray(org, dir, 0.0f, 1.0f)).prim, 0u) << spec;    // tmax exactly at x = 1
+    EXPECT_FALSE(a->intersect1(Ray(org, dir, 5.5f)).valid()) << spec;
+    EXPECT_EQ(a->intersect1(Ray(Vec3f(3.5f, 0.5f, 0.5f), -dir)).prim, 2u) << spec;  // from inside, backwards
+    EXPECT_EQ(a->intersect1(Ray(Vec3f(3.0f, 0.5f, 0.5f), dir)).prim, 2u) << spec;  // on a triangle: t = 0 hit
+    EXPECT_TRUE(a->occluded1(Ray(org, dir, 3.5f, 4.5f))) << spec;
+    EXPECT_FALSE(a->occluded1(Ray(org, dir, 3.2f, 3.8f))) << spec;
+    // Missing the grid, pointing away, invalid rays.
+    EXPECT_FALSE(a->intersect1(Ray(Vec3f(0, 10, 0), dir)).valid()) << spec;
+    EXPECT_FALSE(a->intersect1(Ray(org, -dir)).valid()) << spec;
+    EXPECT_FALSE(a->intersect1(Ray(org, Vec3f::Zero())).valid()) << spec;
+    EXPECT_FALSE(a->intersect1(Ray(org, dir, 2.0f, 1.0f)).valid()) << spec;
+    EXPECT_FALSE(a->intersect1(Ray(Vec3f(NAN, 0, 0), dir)).valid()) << spec;
+    EXPECT_FALSE(a->occluded1(Ray(org, Vec3f::Zero()))) << spec;
+  }
+}
+
+TEST(GridAccel, OriginsOnCellBoundariesAndRaysAlongThem) {
+  // Origins placed exactly on the grid's cell boundaries (as floats), rays
+  // along and across them, compared with brute force.
+  const Scene s = make_triangle_soup(3000, 11, 2.0f);
+  GridOptions opt;
+  opt.res = GridRes{8, 8, 8};
+  BuildStats st;
+  const UniformGrid g = build_uniform_grid(s.mesh, opt, st);
+  std::vector<Ray> rays;
+  Pcg32 rng(12, 9);
+  for (int i = 0; i < 3000; ++i) {
+    Vec3f org;
+    for (int a = 0; a < 3; ++a) org[a] = static_cast<float>(g.dda.boundary(a, static_cast<int64_t>(rng.next() % 9)));
+    Vec3f dir = test::random_direction(rng);
+    const int zeroed = static_cast<int>(rng.next() % 4);
+    if (zeroed < 3) dir[zeroed] = (i % 2) ? 0.0f : -0.0f;
+    if (i % 7 == 0) dir = Vec3f::Unit(i % 3) * ((i % 2) ? 1.0f : -1.0f);
+    rays.emplace_back(org, dir);
+  }
+  const std::vector<Hit> reference = brute_hits(s.mesh, rays);
+  for (const auto& spec : {"grid:res=8x8x8", "hashgrid:res=8x8x8", "grid", "grid2"}) {
+    const Mismatches m = compare_with_brute(s.mesh, spec, rays, reference);
+    EXPECT_EQ(m.closest, 0u) << spec;
+    EXPECT_EQ(m.occlusion, 0u) << spec;
+  }
+}
+
+TEST(GridAccel, DegenerateInputs) {
+  // Empty mesh: builds, every ray misses.
+  TriangleMesh empty;
+  // 1000 copies of one triangle, and degenerate (zero-area) triangles.
+  TriangleMesh copies;
+  for (int i = 0; i < 1000; ++i) add_triangle(copies, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  add_triangle(copies, {0, 0, 1}, {1, 1, 1}, {2, 2, 1});  // collinear
+  add_triangle(copies, {3, 3, 3}, {3, 3, 3}, {3, 3, 3});  // a point
+  for (const auto& spec : {"grid", "hashgrid", "grid2", "grid:assign=bbox"}) {
+    auto a = make_accelerator(spec);
+    a->build(empty);
+    EXPECT_FALSE(a->intersect1(Ray(Vec3f::Zero(), Vec3f::UnitX())).valid());
+    EXPECT_FALSE(a->occluded1(Ray(Vec3f::Zero(), Vec3f::UnitX())));
+    auto b = make_accelerator(spec);
+    const BuildStats st = b->build(copies);
+    EXPECT_GE(st.nodes, 1u);
+    const Hit h = b->intersect1(Ray(Vec3f(0.2f, 0.2f, 5), Vec3f(0, 0, -1)));
+    ASSERT_TRUE(h.valid()) << spec;
+    EXPECT_FLOAT_EQ(h.t, 5.0f);
+    EXPECT_LT(h.prim, 1000u);
+  }
+  expect_all_agree(copies, make_test_rays(copies, 500, 13), "copies");
+}
+
+// ---------------------------------------------------------------------------
+// Statistics, memory, budget, parameters
+
+TEST(GridStats, BuildAndTraversalFiguresAreConsistent) {
+  const Scene s = make_triangle_soup(4000, 3, 1.0f);
+  for (const auto& spec : {"grid", "hashgrid", "grid2"}) {
+    auto a = make_accelerator(spec);
+    const BuildStats st = a->build(s.mesh);
+    EXPECT_GT(st.bytes, s.mesh.num_triangles() * sizeof(GridTriangle)) << spec;
+    EXPECT_GT(st.nodes, 0u);
+    EXPECT_GT(st.leaves, 0u);
+    EXPECT_LE(st.leaves, st.nodes);
+    for (const char* key : {"empty_fraction", "refs_per_triangle", "mean_tris_per_nonempty_cell", "max_tris_per_cell"})
+      ASSERT_TRUE(st.extra.count(key)) << spec << " " << key;
+    EXPECT_GE(st.extra.at("refs_per_triangle"), 1.0) << spec;
+    EXPECT_GE(st.extra.at("empty_fraction"), 0.0);
+    EXPECT_LT(st.extra.at("empty_fraction"), 1.0);
+    EXPECT_GE(st.extra.at("max_tris_per_cell"), st.extra.at("mean_tris_per_nonempty_cell"));
+    const std::vector<Ray> rays = make_test_rays(s.mesh, 1000, 2);
+    std::vector<Hit> hits(rays.size());
+    TraversalStats ts;
+    a->intersect(rays, hits, &ts);
+    EXPECT_EQ(ts.rays, rays.size());
+    EXPECT_GT(ts.nodes_visited, rays.size() / 2) << spec;
+    EXPECT_GT(ts.triangle_tests, 0u);
+    EXPECT_LT(ts.triangle_tests, rays.size() * s.mesh.num_triangles() / 20) << spec;  // far below brute force
+    // The uninstrumented kernel gives the same answers.
+    std::vector<Hit> plain(rays.size());
+    a->intersect(rays, plain);
+    for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(plain[i].prim, hits[i].prim);
+  }
+  // Dense grid: cells = resolution product, bbox assignment adds references.
+  auto exact = make_accelerator("grid:res=10x12x14");
+  auto bbox = make_accelerator("grid:res=10x12x14,assign=bbox");
+  const BuildStats se = exact->build(s.mesh), sb = bbox->build(s.mesh);
+  EXPECT_EQ(se.nodes, 10u * 12u * 14u);
+  EXPECT_EQ(se.extra.at("res_y"), 12.0);
+  EXPECT_GT(sb.extra.at("refs_per_triangle"), se.extra.at("refs_per_triangle"));
+  EXPECT_EQ(se.max_depth, 1);
+  auto two = make_accelerator("grid2");
+  EXPECT_EQ(two->build(s.mesh).max_depth, 2);
+}
+
+TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution) {
+  // Teapot in a stadium: at high density almost every dense cell is empty.
+  const TriangleMesh m = make_stadium_scene();
+  struct Figures {
+    double bytes, cells, occupied, refs;
+  };
+  auto figures = [&](const std::string& spec) {
+    auto a = make_accelerator(spec);
+    const BuildStats st = a->build(m);
+    return Figures{static_cast<double>(st.bytes - m.num_triangles() * sizeof(GridTriangle)), st.extra.at("cells"),
+                   st.extra.at("nonempty_cells"), st.extra.at("refs")};
+  };
+  std::vector<Figures> dense, hashed;
+  for (const char* density : {"1", "8", "64", "512"}) {
+    dense.push_back(figures(std::string("grid:density=") + density));
+    hashed.push_back(figures(std::string("hashgrid:density=") + density));
+    const Figures& d = dense.back();
+    const Figures& h = hashed.back();
+    EXPECT_EQ(d.cells, h.cells) << density;
+    EXPECT_EQ(d.occupied, h.occupied) << density;
+    EXPECT_EQ(d.refs, h.refs) << density;
+    // Dense: 4 bytes per cell and per reference. Hashed: 32 bytes per
+    // occupied cell (16-byte slots, load factor 1/2) and 4 per reference.
+    EXPECT_EQ(d.bytes, 4.0 * (d.cells + 1) + 4.0 * d.refs + sizeof(UniformGrid)) << density;
+    EXPECT_EQ(h.bytes, 32.0 * h.occupied + 4.0 * h.refs + sizeof(HashGrid)) << density;
+  }
+  // From density 1 to 512 the dense grid grows with its cells (512x), the
+  // hashed grid with its occupied cells (~70x here: the room's walls).
+  EXPECT_GT(dense[3].bytes / dense[0].bytes, 150.0);
+  EXPECT_LT(hashed[3].bytes / hashed[0].bytes, 100.0);
+  EXPECT_LT(hashed[3].occupied, 0.05 * hashed[3].cells);
+  EXPECT_LT(hashed[3].bytes, 0.5 * dense[3].bytes);
+}
+
+TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
+  const Scene s = make_triangle_soup(20000, 5, 1.0f);
+  for (const auto& spec : {"grid:density=64,budget=0.5", "hashgrid:density=64,budget=0.5",
+                           "grid2:density=64,budget=0.5", "grid:res=1000x1000x1000,budget=1"}) {
+    auto a = make_accelerator(spec);
+    testing::internal::CaptureStderr();
+    const BuildStats st = a->build(s.mesh);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("warning"), std::string::npos) << spec;
+    EXPECT_NE(err.find("budget"), std::string::npos) << spec;
+    EXPECT_EQ(st.extra.at("budget_capped"), 1.0) << spec;
+    const double budget = std::string(spec).find("budget=1") != std::string::npos ? 1.0 : 0.5;
+    EXPECT_LE(static_cast<double>(st.bytes - s.mesh.num_triangles() * sizeof(GridTriangle)),
+              budget * 1024 * 1024 * 1.05)
+        << spec;
+    if (std::string(spec).find("res=") == std::string::npos) {
+      EXPECT_LT(st.extra.at("lambda"), 64.0) << spec;
+    }
+    // Still correct.
+    const Mismatches m = compare_with_brute(s.mesh, spec, make_test_rays(s.mesh, 300, 3));
+    EXPECT_EQ(m.closest, 0u) << spec;
+  }
+  // Within the budget: no warning.
+  auto ok = make_accelerator("grid");
+  testing::internal::CaptureStderr();
+  const BuildStats st = ok->build(s.mesh);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  EXPECT_EQ(st.extra.at("budget_capped"), 0.0);
+  // A budget that cannot even hold one reference per triangle: a clear error.
+  for (const auto& spec : {"grid:budget=0.01", "hashgrid:budget=0.01", "grid2:budget=0.01"}) {
+    auto tiny = make_accelerator(spec);
+    testing::internal::CaptureStderr();
+    EXPECT_THROW(tiny->build(s.mesh), std::runtime_error) << spec;
+    testing::internal::GetCapturedStderr();
+  }
+}
+
+TEST(GridParams, BadParametersAreRejected) {
+  for (const char* spec : {"grid:density=0", "grid:density=-1", "grid:density=nan", "grid:density=abc",
+                           "grid:density=1e9", "grid:res=0x1x1", "grid:res=64x64", "grid:res=axbxc", "grid:budget=0",
+                           "grid:budget=-5", "grid:assign=foo", "grid:tri=fast", "grid:top=1", "hashgrid:res=1x1",
+                           "hashgrid:density=0", "grid2:top=0", "grid2:density=-2", "grid2:res=4x4x4",
+                           "grid2:assign=none"}) {
+    EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
+  }
+  EXPECT_NO_THROW(make_accelerator("grid:density=0.125,res=4x4x4,budget=16,assign=bbox,tri=mt"));
+  EXPECT_NO_THROW(make_accelerator("grid2:top=0.5,density=2"));
+  const auto r = test::run_raylab("verify --scene cornell --accel grid:density=0 --rays 10");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("density"), std::string::npos) << r.output;
+}
+
+// ---------------------------------------------------------------------------
+// Against Embree (raylab verify) on procedural and shared scenes
+
+void expect_verified(const Scene& scene, size_t rays) {
+  VerifyOptions vo;
+  vo.rays = rays;
+  vo.threads = 2;
+  const auto records = verify_accelerators(scene, {"grid", "hashgrid", "grid2"}, vo);
+  ASSERT_EQ(records.size(), 6u);
+  for (const auto& r : records) {
+    EXPECT_EQ(r.raylab_wrong, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
+    EXPECT_EQ(r.occlusion_disagree, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
+  }
+}
+
+TEST(GridVerify, ProceduralScenesAgreeWithEmbree) {
+  expect_verified(load_scene("cornell"), 20000);
+  expect_verified(load_scene("soup:n=20000,seed=4"), 20000);
+  expect_verified(scene_from_mesh("flat", make_flat_scene(40, 1000, 2)), 20000);
+  expect_verified(scene_from_mesh("stadium", make_stadium_scene()), 20000);
+}
+
+TEST(GridVerify, SharedMeshesAgreeWithEmbree) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
+  for (const char* mesh : {"bunny.ply", "sponza.ply", "teapot.ply"}) {
+    expect_verified(load_scene(test::shared_dir() + "/scenes/" + mesh), 20000);
+  }
+}
+
+TEST(GridVerify, CommandLineVerifyPassesOnDragonInSponza) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
+  const auto r = test::run_raylab("verify --scene " + test::shared_dir() +
+                                  "/scenes/dragon_in_sponza.ply --accel grid,hashgrid,grid2 --rays 20000 --threads 2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace raylab
