@@ -42,10 +42,19 @@ TraceTiming time_trace(const Accelerator& accel, const RaySet& set, int threads,
   TraceOutput out;
   trace_set(accel, set, threads, out);  // warm-up: caches, page faults, TBB workers
   std::vector<double> times;
+  // One thread: the arena runs every chunk on this thread, so its CPU time is the
+  // trace's cost, immune to waiting for a core on a loaded machine. More threads:
+  // wall time, since that is what parallel scaling is about.
   for (int i = 0; i < std::max(1, repeats); ++i) {
-    Timer t;
-    trace_set(accel, set, threads, out);
-    times.push_back(t.seconds());
+    if (threads <= 1) {
+      ThreadCpuTimer t;
+      trace_set(accel, set, 1, out);
+      times.push_back(t.seconds());
+    } else {
+      Timer t;
+      trace_set(accel, set, threads, out);
+      times.push_back(t.seconds());
+    }
   }
   std::sort(times.begin(), times.end());
   TraceTiming timing;

@@ -1,5 +1,6 @@
 #pragma once
 #include <chrono>
+#include <ctime>
 
 namespace raylab {
 
@@ -12,6 +13,23 @@ class Timer {
 
  private:
   std::chrono::steady_clock::time_point start_;
+};
+
+// CPU time of the calling thread (CLOCK_THREAD_CPUTIME_ID). Single-threaded trace
+// timings use it: on a shared 2-core machine, wall time includes the time the
+// thread waited for a core, which no property of the accelerator explains.
+class ThreadCpuTimer {
+ public:
+  ThreadCpuTimer() : start_(now()) {}
+  double seconds() const { return now() - start_; }
+
+ private:
+  static double now() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+  }
+  double start_;
 };
 
 }  // namespace raylab
