@@ -88,7 +88,7 @@ Runner add_stress(CLI::App& app) {
     std::fflush(stdout);
     bool failed = false;
     const auto records = run_stress(specs, so, [&](const StressRecord& r) {
-      std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.2f %8.2f %8.3f %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
+      std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.3g %8.3g %8.3g %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
                   r.scenario.c_str(), r.accel.c_str(), r.status.c_str(), r.triangles, r.rays, r.build_ms,
                   r.bytes / 1048576.0, r.mrays_per_s, r.embree_mrays_per_s, r.ratio,
                   r.hit_miss_disagree + r.prim_disagree, r.ties, r.raylab_wrong, r.embree_wrong, r.leaks,

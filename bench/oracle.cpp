@@ -109,8 +109,18 @@ DoubleEval double_eval(const RayD& r, const Vec3f& p0, const Vec3f& p1, const Ve
   }
   e.certain_miss = pos && neg;
   if (std::fabs(e.det) <= e.err_det) e.uncertain = true;
+  // Margin, relative to each edge function's scale (the size of its float
+  // rounding error): the distance to the nearest edge when the line crosses
+  // (> 0), minus the distance to the farthest violated edge when it does not.
   const double s = e.det < 0 ? -1.0 : 1.0;
-  e.margin = e.det != 0.0 ? std::min({s * e.u, s * e.v, s * e.w}) / std::fabs(e.det) : 0.0;
+  double inside = std::numeric_limits<double>::infinity(), outside = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double scale = e.err_edge[k] / kFilter;
+    const double rel = scale > 0.0 ? s * vals[k] / scale : 0.0;
+    if (rel >= 0.0) inside = std::min(inside, rel);
+    else outside = std::max(outside, -rel);
+  }
+  e.margin = outside > 0.0 ? -outside : (std::isfinite(inside) ? inside : 0.0);
   return e;
 }
 

@@ -16,9 +16,12 @@
 // nearest.
 //
 // `grazing` marks rays whose answer float arithmetic may legitimately get
-// either way: the nearest crossing is within a relative barycentric distance
-// `graze_tol` of an edge (or of tmin/tmax), or the ray passes that close to a
-// triangle it does not cross, or lies in a triangle's plane.
+// either way: an edge function of the nearest crossing is within `graze_tol`
+// of zero relative to its scale |dir| |b| |c| (the scale of its float
+// rounding error: about 1e-7 of it), or the distance is within graze_tol
+// (relative to t and to the coordinates' magnitude over |dir|) of tmin or
+// tmax, or the ray passes that close to a triangle it does not cross, or lies
+// in a triangle's plane.
 #include <cstdint>
 
 #include "accel/core/hit.h"
@@ -44,7 +47,7 @@ struct OracleTriangle {
   bool crosses = false;  // crosses the closed triangle with t in [tmin, tmax] (exact)
   bool coplanar = false; // the ray lies in the triangle's plane
   double t = 0.0;        // crossing distance of the line (rounded), when not parallel
-  double margin = 0.0;   // smallest barycentric coordinate (approximate; < 0 outside)
+  double margin = 0.0;   // relative edge-function margin (approximate): > 0 inside, < 0 outside
   bool exact_used = false;
 };
 OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_t prim);

@@ -72,6 +72,7 @@ RaySet subset(const std::vector<Ray>& rays, size_t stride, std::vector<uint32_t>
   return s;
 }
 
+// One traced run, timed (also the warm-up of the timing runs).
 double timed_trace(const Accelerator& a, const RaySet& set, int threads, TraceOutput& out) {
   Timer t;
   trace_set(a, set, threads, out);
@@ -92,12 +93,12 @@ std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::v
     Spec spec = Spec::parse(text);
     if (spec.name == "embree") {
       Spec robust = spec;
-      robust.params["robust"] = "1";
+      robust.params.insert_or_assign("robust", std::string(1, '1'));
       add(robust.to_string());
     } else if (has_param(spec.name, "tri") && !spec.params.count("tri")) {
-      spec.params["tri"] = "mt";
+      spec.params.insert_or_assign("tri", std::string("mt"));
       // The wide BVH layouts have only the vectorised watertight test.
-      if (spec.name == "bvh" && !spec.params.count("layout")) spec.params["layout"] = "bvh2";
+      if (spec.name == "bvh" && !spec.params.count("layout")) spec.params.insert_or_assign("layout", std::string("bvh2"));
       add(spec.to_string());
     }
   }
@@ -121,8 +122,7 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
     reference->build(sc.scene.mesh);
     RaySet all{"stress", false, rays};
     TraceOutput ref_out;
-    trace_set(*reference, all, threads, ref_out);  // warm-up
-    const double ref_s = timed_trace(*reference, all, threads, ref_out);
+    trace_set(*reference, all, threads, ref_out);
 
     // Leak test: the exact answer for every ray aimed from outside.
     if (sc.watertight()) {
@@ -176,13 +176,13 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
       const RaySet set = subset(rays, stride, ids);
       rec.rays = set.rays.size();
       TraceOutput out, occ;
-      if (stride == 1) trace_set(*accel, set, threads, out);  // warm-up (slow ones go straight to the timed run)
-      const double acc_s = timed_trace(*accel, set, threads, out);
-      double emb_s = ref_s;
-      if (stride > 1) {
-        TraceOutput tmp;
-        emb_s = timed_trace(*reference, set, threads, tmp);
-      }
+      // The traced answers, then the timing: the median of 3 runs when they
+      // are short (under 0.2 s projected), one run otherwise; Embree robust
+      // is timed the same way on the same rays, back to back.
+      const double first_s = timed_trace(*accel, set, threads, out);
+      const int repeats = first_s < 0.2 ? 3 : 1;
+      const double acc_s = time_trace(*accel, set, threads, repeats).median_s;
+      const double emb_s = time_trace(*reference, set, threads, repeats).median_s;
       RaySet occ_set = set;
       occ_set.occlusion = true;
       trace_set(*accel, occ_set, threads, occ);

@@ -146,7 +146,7 @@ void torus_rays(const TriangleMesh& m, const Vec3f& c, float major, float minor,
 StressScenario watertight_scenario(const std::string& name, double scale, uint64_t seed) {
   StressScenario sc;
   Pcg32 rng(mix64(seed * 7919 + std::hash<std::string>{}(name)), 0x57E55);
-  const size_t n = scaled(40000, scale);
+  const size_t n = scaled(100000, scale);
   TriangleMesh mesh;
   std::vector<Ray> rays;
   std::vector<LeakKind> kinds;
@@ -267,7 +267,18 @@ std::vector<Ray> corner_case_rays(const Scene& scene, size_t n, uint64_t seed, c
     if (i % 2) d[static_cast<int>(rng.uniform() * 3) % 3] = rand_sign(1e-40f);  // denormal
     rays.push_back(Ray(o, d, 0.0f, kInf));
   }
-  // 8. Axis-parallel rays through vertices and along edges of the scene (edges lying in box faces).
+  // 8. Invalid rays: NaN or infinite origins, zero or NaN directions, NaN
+  // tmin/tmax, tmin > tmax. Every accelerator must report a miss (and not crash).
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Ray invalid[] = {
+      Ray(Vec3f(nan, 1, 1), Vec3f(0, 0, 1)),          Ray(Vec3f(kInf, 1, 1), Vec3f(0, 0, 1)),
+      Ray(Vec3f(1, -kInf, 1), Vec3f(0, 1, 0)),        Ray(Vec3f(278, 273, -800), Vec3f(0, 0, 0)),
+      Ray(Vec3f(278, 273, -800), Vec3f(-0.0f, 0, -0.0f)), Ray(Vec3f(278, 273, -800), Vec3f(0, nan, 1)),
+      Ray(Vec3f(278, 273, -800), Vec3f(0, 0, kInf)),  Ray(Vec3f(278, 273, -800), Vec3f(0, 0, 1), nan, kInf),
+      Ray(Vec3f(278, 273, -800), Vec3f(0, 0, 1), 0.0f, nan), Ray(Vec3f(278, 273, -800), Vec3f(0, 0, 1), 900.0f, 10.0f),
+  };
+  for (size_t i = 0; i < per / 8; ++i) rays.push_back(invalid[i % std::size(invalid)]);
+  // 9. Axis-parallel rays through vertices and along edges of the scene (edges lying in box faces).
   while (rays.size() < n) {
     const size_t t = std::min(m.num_triangles() - 1, static_cast<size_t>(rng.uniform() * m.num_triangles()));
     const Vec3f& p = m.vertex(t, static_cast<int>(rng.uniform() * 3) % 3);
