@@ -18,6 +18,7 @@ using Runner = std::function<int()>;
 
 Runner add_render(CLI::App& app);
 Runner add_verify(CLI::App& app);
+Runner add_stress(CLI::App& app);
 Runner add_bench(CLI::App& app);
 Runner add_info(CLI::App& app);
 Runner add_scenes(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   };
   add(add_render, "render");
   add(add_verify, "verify");
+  add(add_stress, "stress");
   add(add_bench, "bench");
   add(add_info, "info");
   add(add_scenes, "scenes");

@@ -1,51 +1,317 @@
 #include "bench/oracle.h"
 
+#include <gmpxx.h>
+
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <utility>
+#include <vector>
 
 namespace raylab {
+
+namespace {
+
+// Relative error bound used to decide when double precision cannot be
+// trusted. The double results carry a few rounding errors of 2^-53 each
+// relative to the product of the operands' magnitudes (~1e-15); 1e-12 leaves
+// three orders of magnitude of margin, so a double decision outside the bound
+// is certain, and everything inside goes to GMP.
+constexpr double kFilter = 1e-12;
+
+struct V3q {
+  mpq_class x, y, z;
+};
+
+V3q to_q(const Vec3f& v) { return {mpq_class(static_cast<double>(v.x())), mpq_class(static_cast<double>(v.y())), mpq_class(static_cast<double>(v.z()))}; }
+V3q sub(const V3q& a, const V3q& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3q cross(const V3q& a, const V3q& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+mpq_class dot(const V3q& a, const V3q& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// Exact evaluation of one triangle; t_exact receives the exact line distance
+// when the line is not parallel to the plane.
+struct ExactEval {
+  bool crosses_line = false;  // the line crosses the closed triangle
+  bool coplanar = false;
+  bool parallel = false;
+  mpq_class t;
+};
+
+ExactEval exact_eval(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray) {
+  const V3q o = to_q(ray.org), d = to_q(ray.dir);
+  const V3q a = sub(to_q(p0), o), b = sub(to_q(p1), o), c = sub(to_q(p2), o);
+  const mpq_class U = dot(d, cross(b, c));
+  const mpq_class V = dot(d, cross(c, a));
+  const mpq_class W = dot(d, cross(a, b));
+  ExactEval e;
+  const int su = sgn(U), sv = sgn(V), sw = sgn(W);
+  e.coplanar = su == 0 && sv == 0 && sw == 0;
+  const mpq_class det = U + V + W;
+  e.parallel = sgn(det) == 0;
+  const bool neg = su < 0 || sv < 0 || sw < 0;
+  const bool pos = su > 0 || sv > 0 || sw > 0;
+  e.crosses_line = !(neg && pos) && !e.coplanar && !e.parallel;
+  if (!e.parallel) e.t = dot(a, cross(b, c)) / det;
+  return e;
+}
+
+bool exact_in_range(const mpq_class& t, const Ray& ray) {
+  if (std::isfinite(ray.tmin) && t < mpq_class(static_cast<double>(ray.tmin))) return false;
+  if (ray.tmin == std::numeric_limits<float>::infinity()) return false;
+  if (std::isfinite(ray.tmax) && t > mpq_class(static_cast<double>(ray.tmax))) return false;
+  if (ray.tmax == -std::numeric_limits<float>::infinity()) return false;
+  return true;
+}
+
+// The double evaluation of one triangle with its error bounds.
+struct DoubleEval {
+  double u, v, w, det, t, margin;
+  double err_edge[3];
+  double err_det, err_t;
+  bool certain_miss = false;   // opposite signs beyond the error bounds
+  bool uncertain = false;      // some edge function (or det) within its error bound
+};
+
+struct RayD {
+  Vec3d o, d;
+  double dn;
+  explicit RayD(const Ray& r) : o(r.org.cast<double>()), d(r.dir.cast<double>()), dn(d.norm()) {}
+};
+
+DoubleEval double_eval(const RayD& r, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
+  const Vec3d a = p0.cast<double>() - r.o;
+  const Vec3d b = p1.cast<double>() - r.o;
+  const Vec3d c = p2.cast<double>() - r.o;
+  const double na = a.norm(), nb = b.norm(), nc = c.norm();
+  DoubleEval e;
+  e.u = r.d.dot(b.cross(c));
+  e.v = r.d.dot(c.cross(a));
+  e.w = r.d.dot(a.cross(b));
+  e.err_edge[0] = kFilter * r.dn * nb * nc;
+  e.err_edge[1] = kFilter * r.dn * nc * na;
+  e.err_edge[2] = kFilter * r.dn * na * nb;
+  e.det = e.u + e.v + e.w;
+  e.err_det = e.err_edge[0] + e.err_edge[1] + e.err_edge[2];
+  const double T = a.dot(b.cross(c));
+  const double err_T = kFilter * na * nb * nc;
+  e.t = T / e.det;
+  e.err_t = std::fabs(e.det) > e.err_det ? (err_T + std::fabs(e.t) * e.err_det) / (std::fabs(e.det) - e.err_det)
+                                         : std::numeric_limits<double>::infinity();
+  const double vals[3] = {e.u, e.v, e.w};
+  bool pos = false, neg = false;
+  for (int k = 0; k < 3; ++k) {
+    if (vals[k] > e.err_edge[k]) pos = true;
+    else if (vals[k] < -e.err_edge[k]) neg = true;
+    else e.uncertain = true;
+  }
+  e.certain_miss = pos && neg;
+  if (std::fabs(e.det) <= e.err_det) e.uncertain = true;
+  // Margin, relative to each edge function's scale (the size of its float
+  // rounding error): the distance to the nearest edge when the line crosses
+  // (> 0), minus the distance to the farthest violated edge when it does not.
+  const double s = e.det < 0 ? -1.0 : 1.0;
+  double inside = std::numeric_limits<double>::infinity(), outside = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double scale = e.err_edge[k] / kFilter;
+    const double rel = scale > 0.0 ? s * vals[k] / scale : 0.0;
+    if (rel >= 0.0) inside = std::min(inside, rel);
+    else outside = std::max(outside, -rel);
+  }
+  e.margin = outside > 0.0 ? -outside : (std::isfinite(inside) ? inside : 0.0);
+  return e;
+}
+
+// Range check with an uncertainty band; nullopt = undecided in double.
+std::optional<bool> double_in_range(double t, double err, const Ray& ray) {
+  const double lo = ray.tmin, hi = ray.tmax;
+  if (!(t - err >= lo || t + err < lo)) return std::nullopt;
+  if (!(t + err <= hi || t - err > hi)) return std::nullopt;
+  return t >= lo && t <= hi;
+}
+
+// Tolerance on a distance near tmin/tmax: relative to t, and to the
+// coordinates' magnitude over |dir| (a float origin on a surface is off it by
+// an ulp of its coordinates, so the distance to that surface is only known
+// to about that).
+double t_slack_for(double graze_tol, double t, const RayD& r, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
+  const double s = std::max({r.o.cwiseAbs().maxCoeff(), static_cast<double>(p0.cwiseAbs().maxCoeff()),
+                             static_cast<double>(p1.cwiseAbs().maxCoeff()), static_cast<double>(p2.cwiseAbs().maxCoeff())});
+  return graze_tol * std::max(std::fabs(t), s / r.dn);
+}
+
+struct Candidate {
+  uint32_t prim;
+  double t, err;
+  std::optional<mpq_class> exact_t;
+};
+
+}  // namespace
+
+OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray) {
+  OracleTriangle out;
+  out.exact_used = true;
+  if (!ray_is_valid(ray)) return out;
+  const ExactEval e = exact_eval(p0, p1, p2, ray);
+  out.coplanar = e.coplanar;
+  if (!e.parallel) out.t = e.t.get_d();
+  out.crosses = e.crosses_line && exact_in_range(e.t, ray);
+  const DoubleEval d = double_eval(RayD(ray), p0, p1, p2);
+  out.margin = d.margin;
+  return out;
+}
+
+OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_t prim) {
+  OracleTriangle out;
+  if (!ray_is_valid(ray) || prim >= mesh.num_triangles()) return out;
+  const Vec3f &p0 = mesh.vertex(prim, 0), &p1 = mesh.vertex(prim, 1), &p2 = mesh.vertex(prim, 2);
+  const DoubleEval d = double_eval(RayD(ray), p0, p1, p2);
+  if (!d.uncertain) {
+    out.margin = d.margin;
+    out.t = d.t;
+    if (d.certain_miss) return out;
+    const auto in = double_in_range(d.t, d.err_t, ray);
+    if (in) {
+      out.crosses = *in;
+      return out;
+    }
+  }
+  return oracle_triangle_exact(p0, p1, p2, ray);
+}
 
 OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol) {
   OracleHit best;
   if (!ray_is_valid(ray)) return best;
-  const Vec3d o = ray.org.cast<double>();
-  const Vec3d d = ray.dir.cast<double>();
-  const Vec3d ad = d.cwiseAbs();
-  int kz = (ad.x() >= ad.y()) ? (ad.x() >= ad.z() ? 0 : 2) : (ad.y() >= ad.z() ? 1 : 2);
-  int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-  if (d[kz] < 0.0) std::swap(kx, ky);
-  const double sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1.0 / d[kz];
+  const RayD rd(ray);
   const double tmin = ray.tmin, tmax = ray.tmax;
+  std::vector<Candidate> cands;
 
   for (size_t i = 0; i < mesh.num_triangles(); ++i) {
-    const Vec3d a = mesh.vertex(i, 0).cast<double>() - o;
-    const Vec3d b = mesh.vertex(i, 1).cast<double>() - o;
-    const Vec3d c = mesh.vertex(i, 2).cast<double>() - o;
-    const double ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
-    const double bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
-    const double cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
-    const double u = cx * by - cy * bx;
-    const double v = ax * cy - ay * cx;
-    const double w = bx * ay - by * ax;
-    const double det = u + v + w;
-    if (det == 0.0) continue;
-    const double t = (u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det;
-    if (!std::isfinite(t)) continue;
-    const double bu = u / det, bv = v / det, bw = w / det;
-    const double margin = std::min({bu, bv, bw});
-    const double t_slack = graze_tol * std::max(1.0, std::fabs(t));
-    const bool in_range = t >= tmin - t_slack && t <= tmax + t_slack;
-    if (in_range && std::fabs(margin) < graze_tol) best.grazing = true;
-    if (in_range && margin >= -graze_tol && (std::fabs(t - tmin) < t_slack || std::fabs(t - tmax) < t_slack))
+    const Vec3f &p0 = mesh.vertex(i, 0), &p1 = mesh.vertex(i, 1), &p2 = mesh.vertex(i, 2);
+    const DoubleEval d = double_eval(rd, p0, p1, p2);
+    const double t_slack = t_slack_for(graze_tol, d.t, rd, p0, p1, p2);
+    const bool near_range = d.t >= tmin - t_slack && d.t <= tmax + t_slack;
+    // Grazing: within graze_tol of an edge, or of tmin/tmax, or in the plane.
+    if (std::fabs(d.det) <= d.err_det) {
+      const bool all_small = std::fabs(d.u) <= d.err_edge[0] * 1e3 && std::fabs(d.v) <= d.err_edge[1] * 1e3 &&
+                             std::fabs(d.w) <= d.err_edge[2] * 1e3;
+      if (all_small) {
+        // Lying in (or within rounding of) the plane: grazing if the segment
+        // comes near the triangle's bounds.
+        Aabb box = mesh.triangle_bounds(i);
+        double t0 = tmin, t1 = tmax;
+        bool overlaps = true;
+        for (int a = 0; a < 3 && overlaps; ++a) {
+          const double pad = 1e-6 * std::max(1.0, std::fabs(static_cast<double>(box.hi[a])) + std::fabs(static_cast<double>(box.lo[a])));
+          const double lo = box.lo[a] - pad, hi = box.hi[a] + pad;
+          if (rd.d[a] == 0.0) {
+            overlaps = rd.o[a] >= lo && rd.o[a] <= hi;
+          } else {
+            double ta = (lo - rd.o[a]) / rd.d[a], tb = (hi - rd.o[a]) / rd.d[a];
+            if (ta > tb) std::swap(ta, tb);
+            t0 = std::max(t0, ta);
+            t1 = std::min(t1, tb);
+            overlaps = t0 <= t1;
+          }
+        }
+        if (overlaps) best.grazing = true;
+      }
+    }
+    if (std::isfinite(d.t) && near_range && std::fabs(d.margin) < graze_tol) best.grazing = true;
+    if (std::isfinite(d.t) && near_range && d.margin >= -graze_tol &&
+        (std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
       best.grazing = true;
-    if (margin < 0.0 || t < tmin || t > tmax) continue;
-    if (!best.valid || t < best.t) {
-      best.valid = true;
-      best.t = t;
-      best.prim = static_cast<uint32_t>(i);
+
+    if (d.certain_miss) continue;
+    Candidate c{static_cast<uint32_t>(i), d.t, d.err_t, std::nullopt};
+    bool crosses;
+    std::optional<bool> in = d.uncertain ? std::nullopt : double_in_range(d.t, d.err_t, ray);
+    if (in) {
+      crosses = *in;
+    } else {
+      best.exact_used = true;
+      const ExactEval e = exact_eval(p0, p1, p2, ray);
+      crosses = e.crosses_line && exact_in_range(e.t, ray);
+      if (crosses) {
+        c.exact_t = e.t;
+        c.t = e.t.get_d();
+        c.err = 0.0;
+      }
+    }
+    if (!crosses) continue;
+    if (d.margin >= graze_tol && !(std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
+      best.robust_hit = true;
+    cands.push_back(std::move(c));
+  }
+  if (cands.empty()) return best;
+
+  // Nearest: by the double distances, exactly where their error bands overlap.
+  auto exact_t = [&](Candidate& c) -> const mpq_class& {
+    if (!c.exact_t) {
+      best.exact_used = true;
+      const uint32_t p = c.prim;
+      c.exact_t = exact_eval(mesh.vertex(p, 0), mesh.vertex(p, 1), mesh.vertex(p, 2), ray).t;
+    }
+    return *c.exact_t;
+  };
+  size_t bi = 0;
+  for (size_t k = 1; k < cands.size(); ++k)
+    if (cands[k].t < cands[bi].t) bi = k;
+  for (size_t k = 0; k < cands.size(); ++k) {
+    if (k == bi) continue;
+    Candidate& c = cands[k];
+    Candidate& b = cands[bi];
+    if (c.t - c.err > b.t + b.err) continue;
+    const int order = ::cmp(exact_t(c), exact_t(b));
+    if (order < 0) {
+      bi = k;
+      best.exact_tie = false;
+    } else if (order == 0) {
+      best.exact_tie = true;
+      if (c.prim < b.prim) bi = k;
     }
   }
+  best.valid = true;
+  best.t = cands[bi].t;
+  best.prim = cands[bi].prim;
   return best;
+}
+
+namespace {
+bool same_distance(double a, double b, double tol) {
+  return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30});
+}
+}  // namespace
+
+Verdict oracle_judge(const TriangleMesh& mesh, const Ray& ray, const Hit& hit, const OracleHit& truth, double tie_tol,
+                     double graze_tol) {
+  if (!hit.valid()) {
+    if (!truth.valid) return Verdict::Correct;
+    return truth.robust_hit ? Verdict::Wrong : Verdict::Tie;
+  }
+  if (truth.valid && hit.prim == truth.prim) return Verdict::Correct;
+  if (hit.prim >= mesh.num_triangles()) return Verdict::Wrong;
+  const OracleTriangle p = oracle_triangle(mesh, ray, hit.prim);
+  if (p.crosses) {
+    // A crossing triangle; right if it is (one of) the nearest.
+    if (truth.valid && same_distance(p.t, truth.t, tie_tol)) return Verdict::Tie;
+    return truth.grazing ? Verdict::Tie : Verdict::Wrong;
+  }
+  // Not crossed exactly: a tie only if it is a near miss (edge or range) or in plane.
+  if (p.coplanar) return Verdict::Tie;
+  const double t_slack = t_slack_for(graze_tol, p.t, RayD(ray), mesh.vertex(hit.prim, 0), mesh.vertex(hit.prim, 1),
+                                     mesh.vertex(hit.prim, 2));
+  const bool near_range = p.t >= ray.tmin - t_slack && p.t <= ray.tmax + t_slack;
+  if (near_range && p.margin > -graze_tol) return Verdict::Tie;
+  return Verdict::Wrong;
+}
+
+Verdict oracle_judge_occluded(const Ray& /*ray*/, bool occluded, const OracleHit& truth) {
+  if (occluded == truth.valid) return Verdict::Correct;
+  if (!occluded) return truth.robust_hit ? Verdict::Wrong : Verdict::Tie;
+  return truth.grazing ? Verdict::Tie : Verdict::Wrong;
 }
 
 }  // namespace raylab

@@ -1,11 +1,27 @@
 #pragma once
 // Independent referee for disagreements between an accelerator and Embree:
-// every triangle tested in double precision with the watertight test's
-// algorithm. It also reports whether the ray passes within a relative
-// distance `graze_tol` of some triangle's edge (or of its tmin/tmax), where
-// float computations may legitimately decide either way. Rays through edges
-// and vertices exactly need exact arithmetic (a later refinement); such rays
-// are reported as grazing here, not as errors.
+// brute force over every triangle.
+//
+// Each triangle is first tested in double precision with the three signed
+// volumes of the ray and the triangle's edges (Pluecker-style edge functions,
+// U for the edge opposite p0, V opposite p1, W opposite p2): the line crosses
+// the closed triangle iff they do not have opposite signs and are not all
+// zero, and t = [a, b, c] / (U + V + W) with a, b, c the vertices relative to
+// the origin. Where double precision cannot decide - an edge function within
+// its error bound of zero (a ray through an edge or a vertex), or a distance
+// that close to tmin, tmax or to another candidate's - the decision is made
+// again with exact rational arithmetic (GMP) on the ray's exact float origin
+// and direction and the triangle's exact float vertices. So the oracle says
+// exactly whether the float ray crosses each triangle and which one is
+// nearest.
+//
+// `grazing` marks rays whose answer float arithmetic may legitimately get
+// either way: an edge function of the nearest crossing is within `graze_tol`
+// of zero relative to its scale |dir| |b| |c| (the scale of its float
+// rounding error: about 1e-7 of it), or the distance is within graze_tol
+// (relative to t and to the coordinates' magnitude over |dir|) of tmin or
+// tmax, or the ray passes that close to a triangle it does not cross, or lies
+// in a triangle's plane.
 #include <cstdint>
 
 #include "accel/core/hit.h"
@@ -15,12 +31,40 @@
 namespace raylab {
 
 struct OracleHit {
-  bool valid = false;
-  double t = 0.0;
+  bool valid = false;       // the ray exactly crosses some triangle within [tmin, tmax]
+  double t = 0.0;           // nearest crossing (rounded to double)
   uint32_t prim = kInvalidPrim;
-  bool grazing = false;
+  bool grazing = false;     // some triangle is within graze_tol of being crossed or missed
+  bool robust_hit = false;  // some crossing is not grazing: any correct answer hits something
+  bool exact_used = false;  // exact arithmetic decided at least one triangle
+  bool exact_tie = false;   // two triangles cross at exactly the same nearest distance
 };
 
 OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol = 1e-5);
+
+// One triangle against one ray, decided as by oracle_closest_hit.
+struct OracleTriangle {
+  bool crosses = false;  // crosses the closed triangle with t in [tmin, tmax] (exact)
+  bool coplanar = false; // the ray lies in the triangle's plane
+  double t = 0.0;        // crossing distance of the line (rounded), when not parallel
+  double margin = 0.0;   // relative edge-function margin (approximate): > 0 inside, < 0 outside
+  bool exact_used = false;
+};
+OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_t prim);
+
+// Exact decision alone (always GMP), for tests and for the leak test.
+OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray);
+
+enum class Verdict : uint8_t { Correct, Tie, Wrong };
+
+// Judges one closest-hit answer against the oracle's `truth` for the ray:
+// Correct when it names the nearest triangle (or a miss when there is none);
+// Tie when it differs only where float arithmetic may (a triangle at the same
+// distance within `tie_tol` relative, or a grazing ray); Wrong otherwise.
+Verdict oracle_judge(const TriangleMesh& mesh, const Ray& ray, const Hit& hit, const OracleHit& truth,
+                     double tie_tol = 1e-4, double graze_tol = 1e-5);
+
+// The same for an any-hit (occlusion) answer.
+Verdict oracle_judge_occluded(const Ray& ray, bool occluded, const OracleHit& truth);
 
 }  // namespace raylab

@@ -51,18 +51,13 @@ Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<
             continue;
           }
           const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
-          if (o.grazing) {
-            c.ties++;
-            continue;
-          }
-          if (hit_miss) c.hit_miss++;
+          const Verdict va = oracle_judge(scene.mesh, set.rays[i], a, o, tol);
+          const Verdict ve = oracle_judge(scene.mesh, set.rays[i], e, o, tol);
+          if (va == Verdict::Wrong) c.raylab_wrong++;
+          if (ve == Verdict::Wrong) c.embree_wrong++;
+          if (va != Verdict::Wrong && ve != Verdict::Wrong) c.ties++;
+          else if (hit_miss) c.hit_miss++;
           else c.prim++;
-          auto agrees = [&](const Hit& h) {
-            if (h.valid() != o.valid) return false;
-            return !h.valid() || h.prim == o.prim || same_distance(h.t, o.t, tol);
-          };
-          if (!agrees(a)) c.raylab_wrong++;
-          if (!agrees(e)) c.embree_wrong++;
         }
         return c;
       },
@@ -78,13 +73,12 @@ Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vecto
         for (size_t i = r.begin(); i < r.end(); ++i) {
           if (ref[i] == got[i]) continue;
           const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
-          if (o.grazing) {
-            c.ties++;
-            continue;
-          }
-          c.hit_miss++;
-          if (static_cast<bool>(got[i]) != o.valid) c.raylab_wrong++;
-          if (static_cast<bool>(ref[i]) != o.valid) c.embree_wrong++;
+          const Verdict va = oracle_judge_occluded(set.rays[i], got[i] != 0, o);
+          const Verdict ve = oracle_judge_occluded(set.rays[i], ref[i] != 0, o);
+          if (va == Verdict::Wrong) c.raylab_wrong++;
+          if (ve == Verdict::Wrong) c.embree_wrong++;
+          if (va != Verdict::Wrong && ve != Verdict::Wrong) c.ties++;
+          else c.hit_miss++;
         }
         return c;
       },

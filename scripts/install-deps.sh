@@ -16,6 +16,7 @@ packages=(
   nlohmann-json3-dev # JSON output and scene files
   libassimp-dev      # mesh import
   libgmp-dev         # exact arithmetic for the edge/vertex oracle
+  clang libclang-rt-14-dev  # libFuzzer targets (scripts/fuzz.sh)
   python3-matplotlib # charts (run with /usr/bin/python3)
 )
 

@@ -61,6 +61,11 @@ std::vector<BadFile> bad_files() {
                "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n"
                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
                "4000000000"});
+  // Absurd declared counts in the other formats with counts in a header.
+  c.push_back({"absurd_vertices.off", "OFF\n4000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "declares 4000000000 vertices"});
+  c.push_back({"absurd_faces.off", "OFF\n3 4000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "4000000000 faces"});
+  c.push_back({"absurd_bin.stl", std::string(80, '\0') + std::string(4, '\xFF') + std::string(50, '\0'),
+               "declares 4294967295 triangles"});
   // PLY, binary
   const std::vector<float> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   const std::string good_bin = test::binary_ply(tri, {{0, 1, 2}});

@@ -42,17 +42,12 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
   if constexpr (kCount) stats->rays++;
   if (bvh.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
 
-  // Exact reciprocals for (nearly) zero direction components: the safe
-  // 1 / 1e-30 of SlabRay turns (hi - o) into 0 for a ray lying in a box's
-  // face plane and ends that slab at t = 0. With 1 / +-0 = +-inf the product
-  // is NaN there, which slab_test's comparisons ignore (slab unbounded).
-  SlabRay sr(ray);
-  for (int a = 0; a < 3; ++a)
-    if (std::fabs(ray.dir[a]) < 1e-30f) sr.inv_dir[a] = 1.0f / ray.dir[a];
+  // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
+  const SlabRay sr(ray);
   const TrianglePrecompute<kTest> pre(ray);
   const float tmin = ray.tmin;
   float tmax = ray.tmax;
-  float box_tmax = tmax * kSlabFarScale;
+  float box_tmax = pad_far(tmax);
 
   struct Entry {
     uint32_t node;
@@ -77,7 +72,7 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
           if (t < tmax || !hit.valid()) {
             hit = Hit{t, u, v, tri->prim};
             tmax = t;
-            box_tmax = tmax * kSlabFarScale;
+            box_tmax = pad_far(tmax);
             if constexpr (kAnyHit) return hit;
           }
         }

@@ -195,7 +195,9 @@ template <int N, bool kExact>
   const V fy = (V::load(b + r.far_off[1]) - r.org[1]) * r.inv[1];
   const V fz = (V::load(b + r.far_off[2]) - r.org[2]) * r.inv[2];
   tnear = max(nx, max(ny, max(nz, tmin)));
-  const V tfar = min(fx, min(fy, min(fz, tmax))) * V::broadcast(kSlabFarScale);
+  const V tfar0 = min(fx, min(fy, min(fz, tmax)));
+  // Padded outward in both signs (negative far distances arise when tmin < 0).
+  const V tfar = max(tfar0 * V::broadcast(kSlabFarScale), tfar0 * V::broadcast(kSlabFarScaleNeg));
   return cmp_le(tnear, tfar);
 }
 
@@ -235,7 +237,10 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
     while (sp > 0) {
       const uint64_t e = stack[--sp];
       if constexpr (!kAnyHit) {
-        if (key_dist(e) > tmax * kSlabFarScale) continue;
+        // Keys clamp negative entry distances (tmin < 0) to 0: with a hit at
+        // t < 0 only the subtrees entered at t > 0 can be culled here (the
+        // others are culled, exactly, by the box test when visited).
+        if (key_dist(e) > (tmax >= 0.0f ? tmax * kSlabFarScale : 0.0f)) continue;
       }
       cur = key_ref(e);
       return true;

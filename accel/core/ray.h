@@ -23,8 +23,12 @@ struct Ray {
 };
 
 // True when a ray can be traced: finite origin, finite non-zero direction,
-// tmin not NaN, tmax not NaN. Accelerators treat invalid rays as misses;
-// the command line rejects them before tracing.
+// tmin not NaN, tmax not NaN. Accelerators treat invalid rays (and rays with
+// tmin > tmax) as misses, never as undefined behaviour: intersect() reports
+// no hit, occluded() reports not occluded (tested for every accelerator in
+// test_accelerators.cpp, and by the `rays` scenario of `raylab stress`). The
+// command line makes no rays from user input except through cameras, whose
+// views are checked (view_problem) before any ray is made.
 bool ray_is_valid(const Ray& r);
 
 }  // namespace raylab

@@ -4,10 +4,18 @@
 // Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013: with correctly rounded
 // reciprocals, scaling the far distance by 1 + 2*gamma(3) (gamma(n) = n*eps /
 // (1 - n*eps), eps = 2^-24) guarantees that rounding never makes a box that the
-// ray really crosses look missed. Zero direction components are replaced by a
-// tiny value of the same sign, so (lo - org) * inv never becomes 0 * inf = NaN;
-// a ray lying exactly in a box face is then treated as entering the box
-// (conservative).
+// ray really crosses look missed. Far distances that are negative (boxes
+// behind the origin, reached by rays with tmin < 0) are scaled by
+// 1 - 2*gamma(3) instead, which moves them outward as well (pad_far).
+//
+// Zero direction components get exact reciprocals, 1 / +-0 = +-inf: a ray
+// parallel to a slab and outside it gets entry/exit distances of +-inf (box
+// missed), and a ray lying exactly in a box face plane gets 0 * inf = NaN,
+// which the comparisons below ignore, leaving that slab unbounded (the ray
+// is treated as inside, conservatively). An earlier version replaced zero
+// components by +-1e-30; then (face - org) * (1 / -1e-30) = -0 ended the slab
+// at t = 0 for a ray lying in a face plane with a -0 (or, on the other face,
+// +0) component, and every box touching that plane was lost for tmin > 0.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -19,6 +27,10 @@ namespace raylab {
 
 inline constexpr float kFloatGamma3 = (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
 inline constexpr float kSlabFarScale = 1.0f + 2.0f * kFloatGamma3;
+inline constexpr float kSlabFarScaleNeg = 1.0f - 2.0f * kFloatGamma3;
+
+// A far distance padded outward: up when positive, towards zero when negative.
+inline float pad_far(float t) { return t * (t >= 0.0f ? kSlabFarScale : kSlabFarScaleNeg); }
 
 inline float safe_reciprocal(float d) {
   constexpr float kTiny = 1e-30f;
@@ -34,7 +46,7 @@ struct SlabRay {
   SlabRay() = default;
   explicit SlabRay(const Ray& r) : org(r.org) {
     for (int i = 0; i < 3; ++i) {
-      inv_dir[i] = safe_reciprocal(r.dir[i]);
+      inv_dir[i] = 1.0f / r.dir[i];  // +-inf for +-0 (see the comment at the top)
       neg[i] = std::signbit(r.dir[i]) ? 1 : 0;
     }
   }
@@ -48,7 +60,7 @@ inline bool slab_test(const SlabRay& r, const float lo[3], const float hi[3], fl
   float t0 = tmin, t1 = tmax;
   for (int a = 0; a < 3; ++a) {
     const float tn = (bounds[r.neg[a]][a] - r.org[a]) * r.inv_dir[a];
-    const float tf = (bounds[1 - r.neg[a]][a] - r.org[a]) * r.inv_dir[a] * kSlabFarScale;
+    const float tf = pad_far((bounds[1 - r.neg[a]][a] - r.org[a]) * r.inv_dir[a]);
     t0 = tn > t0 ? tn : t0;
     t1 = tf < t1 ? tf : t1;
   }
@@ -67,7 +79,7 @@ inline bool clip_to_box(const SlabRay& r, const Aabb& b, float tmin, float tmax,
   float t0 = tmin, t1 = tmax;
   for (int a = 0; a < 3; ++a) {
     const float tn = (bounds[r.neg[a]][a] - r.org[a]) * r.inv_dir[a];
-    const float tf = (bounds[1 - r.neg[a]][a] - r.org[a]) * r.inv_dir[a] * kSlabFarScale;
+    const float tf = pad_far((bounds[1 - r.neg[a]][a] - r.org[a]) * r.inv_dir[a]);
     t0 = tn > t0 ? tn : t0;
     t1 = tf < t1 ? tf : t1;
   }

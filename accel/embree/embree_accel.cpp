@@ -6,7 +6,9 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <chrono>
 #include <cstring>
 #include <mutex>
@@ -98,13 +100,13 @@ class EmbreeAccel final : public Accelerator {
       h = Hit{};
       if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
       RTCRayHit rh;
-      fill_ray(r, rh.ray);
+      const float shift = fill_ray(r, rh.ray);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene_, &ctx, &rh);
       if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-        h.t = rh.ray.tfar;
+        h.t = rh.ray.tfar + shift;
         h.u = rh.hit.u;
         h.v = rh.hit.v;
         h.prim = rh.hit.primID;
@@ -122,7 +124,7 @@ class EmbreeAccel final : public Accelerator {
       occ[i] = 0;
       if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
       RTCRay ray;
-      fill_ray(r, ray);
+      (void)fill_ray(r, ray);
       rtcOccluded1(scene_, &ctx, &ray);
       occ[i] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
     }
@@ -130,19 +132,34 @@ class EmbreeAccel final : public Accelerator {
   }
 
  private:
-  static void fill_ray(const Ray& r, RTCRay& ray) {
-    ray.org_x = r.org.x();
-    ray.org_y = r.org.y();
-    ray.org_z = r.org.z();
-    ray.tnear = r.tmin;
+  // Embree requires tnear >= 0 (its debug builds assert it, release builds
+  // give undefined results). A segment that starts behind the origin
+  // (tmin < 0) is traced from the point at tmin instead, with distances
+  // shifted back by tmin afterwards (returned by the function, 0 otherwise);
+  // the new origin is rounded to float, so distances can differ in the last
+  // bits from a structure that keeps the original origin. tmin = -inf cannot
+  // be shifted: Embree then sees only the part t >= 0 (a documented limit).
+  static float fill_ray(const Ray& r, RTCRay& ray) {
+    float shift = 0.0f;
+    float org[3] = {r.org.x(), r.org.y(), r.org.z()};
+    if (r.tmin < 0.0f && std::isfinite(r.tmin)) {
+      shift = r.tmin;
+      for (int a = 0; a < 3; ++a)
+        org[a] = static_cast<float>(static_cast<double>(r.org[a]) + static_cast<double>(r.tmin) * r.dir[a]);
+    }
+    ray.org_x = org[0];
+    ray.org_y = org[1];
+    ray.org_z = org[2];
+    ray.tnear = std::max(0.0f, r.tmin - shift);
     ray.dir_x = r.dir.x();
     ray.dir_y = r.dir.y();
     ray.dir_z = r.dir.z();
     ray.time = 0.0f;
-    ray.tfar = r.tmax;
+    ray.tfar = r.tmax - shift;  // tmax = +inf stays +inf
     ray.mask = 0xFFFFFFFFu;
     ray.id = 0;
     ray.flags = 0;
+    return shift;
   }
 
   static void on_error(void* user, RTCError code, const char* msg) {

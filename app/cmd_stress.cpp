@@ -1,0 +1,114 @@
+// `raylab stress`: every stress scenario against every accelerator (bench/stress.h).
+#include <cstdio>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "accel/registry.h"
+#include "app/commands.h"
+#include "bench/report.h"
+#include "bench/stress.h"
+
+namespace raylab::cli {
+
+nlohmann::json stress_record_json(const StressRecord& r) {
+  // The keys of `raylab verify` first, then the stress-specific ones.
+  return {{"scene", r.scenario},
+          {"accel", r.accel},
+          {"ray_set", "stress"},
+          {"rays", r.rays},
+          {"hit_miss_disagree", r.hit_miss_disagree},
+          {"prim_disagree", r.prim_disagree},
+          {"ties", r.ties},
+          {"raylab_wrong", r.raylab_wrong},
+          {"embree_wrong", r.embree_wrong},
+          {"occlusion_disagree", r.occlusion_disagree},
+          {"max_rel_t_err", r.max_rel_t_err},
+          {"build_ms", r.build_ms},
+          {"ok", !r.failed()},
+          {"scenario", r.scenario},
+          {"status", r.status},
+          {"error", r.error},
+          {"triangles", r.triangles},
+          {"subsampled", r.subsampled},
+          {"bytes", r.bytes},
+          {"mrays_per_s", r.mrays_per_s},
+          {"embree_mrays_per_s", r.embree_mrays_per_s},
+          {"ratio_to_embree", r.ratio},
+          {"watertight_test", r.watertight_test},
+          {"counts_for_exit", r.counts},
+          {"leak_rays", r.leak_rays},
+          {"leaks", r.leaks},
+          {"leaks_per_million", r.leaks_per_million()}};
+}
+
+Runner add_stress(CLI::App& app) {
+  struct Opts {
+    std::string accel = "all", scenario = "all", json;
+    double ray_scale = 1.0, budget = 2.0;
+    uint64_t seed = 1;
+    int threads = 0;
+    bool list = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "stress", "run named failure scenarios (precision, degenerate scenes, watertightness, ray corner cases) "
+                "against every accelerator, Embree (robust) as the reference, the exact oracle as the judge");
+  cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
+  cmd->add_option("--scenario", o->scenario, "scenario names or prefixes, comma separated, or 'all' (see --list)")
+      ->capture_default_str();
+  cmd->add_option("--ray-scale", o->ray_scale, "multiply every scenario's ray count")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-4, 100.0));
+  cmd->add_option("--budget", o->budget, "seconds of tracing per scenario x accelerator; slower ones trace a subset")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 3600.0));
+  cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--json", o->json, "write records to this JSON file");
+  cmd->add_flag("--list", o->list, "list the scenarios and exit");
+
+  return [o]() {
+    if (o->list) {
+      std::fputs(describe_stress_scenarios().c_str(), stdout);
+      return 0;
+    }
+    const auto specs = expand_accelerator_list(o->accel);
+    StressOptions so;
+    so.scenarios = expand_stress_scenarios(o->scenario);
+    so.ray_scale = o->ray_scale;
+    so.time_budget_s = o->budget;
+    so.seed = o->seed;
+    so.threads = o->threads;
+    std::printf("stress: %zu scenarios x %zu accelerators, reference %s, judge: exact oracle\n", so.scenarios.size(),
+                specs.size(), so.reference.c_str());
+    std::printf("%-18s %-26s %-11s %9s %8s %10s %8s %8s %8s %8s %7s %6s %6s %6s %7s %9s\n", "scenario", "accel", "status",
+                "tris", "rays", "build ms", "MiB", "Mrays/s", "embree", "ratio", "disagr", "ties", "rl_wr", "em_wr",
+                "leaks", "leaks/M");
+    std::fflush(stdout);
+    bool failed = false;
+    const auto records = run_stress(specs, so, [&](const StressRecord& r) {
+      std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.3g %8.3g %8.3g %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
+                  r.scenario.c_str(), r.accel.c_str(), r.status.c_str(), r.triangles, r.rays, r.build_ms,
+                  r.bytes / 1048576.0, r.mrays_per_s, r.embree_mrays_per_s, r.ratio,
+                  r.hit_miss_disagree + r.prim_disagree, r.ties, r.raylab_wrong, r.embree_wrong, r.leaks,
+                  r.leaks_per_million(), r.error.empty() ? "" : fmt::format("  ({})", r.error).c_str());
+      std::fflush(stdout);
+    });
+    nlohmann::json recs = nlohmann::json::array();
+    size_t n_failed = 0;
+    for (const auto& r : records) {
+      if (r.failed()) {
+        failed = true;
+        n_failed++;
+      }
+      recs.push_back(stress_record_json(r));
+    }
+    if (!o->json.empty()) write_json_report(o->json, report_header("stress"), recs);
+    std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
+                records.size(), n_failed);
+    return failed ? kExitCheckFailed : 0;
+  };
+}
+
+}  // namespace raylab::cli
