@@ -37,10 +37,10 @@ struct Preset {
 Preset find_preset(const std::string& name) {
   const std::string all_threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
   if (name == "quick")
-    return {"cornell;terrain:n=96;sphereflake:level=2,segments=12", "all", "primary,diffuse,shadow,random", all_threads,
+    return {"cornell;terrain:n=96;sphereflake:level=2,segments=12", "all;bvh:layout=bvh2,tri=mt", "primary,diffuse,shadow,random", all_threads,
             "192x192", 49152, 5, 3, 5000};
   if (name == "full")
-    return {"cornell;terrain:n=256;sphereflake:level=3;city;grass;soup:n=100000", "all", "primary,diffuse,shadow,random",
+    return {"cornell;terrain:n=256;sphereflake:level=3;city;grass;soup:n=100000", "all;bvh:layout=bvh2,tri=mt", "primary,diffuse,shadow,random",
             all_threads, "512x512", 262144, 7, 3, 5000};
   throw std::invalid_argument(fmt::format("unknown preset '{}' (presets: quick, full)", name));
 }

@@ -94,7 +94,7 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
 
     # Accuracy per configuration: from verify (oracle-referred) when given,
     # else from the bench's own agreement with Embree.
-    wrong, disagree, source = {}, {}, "bench agreement with Embree"
+    wrong, disagree, terr, source = {}, {}, {}, "bench agreement with Embree"
     vrecs = [r for f in verify_files for r in records(f)]
     if vrecs:
         source = "raylab verify"
@@ -103,8 +103,9 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
             t = tot.setdefault(r["accel"], [0, 0, 0, 0])
             t[0] += r["rays"]
             t[1] += r["raylab_wrong"]
-            t[2] += r.get("hit_miss_disagree", 0) + r.get("prim_disagree", 0)
+            t[2] += r.get("hit_miss_disagree", 0) + r.get("prim_disagree", 0) + r.get("ties", 0)
             t[3] += r.get("embree_wrong", 0)
+            terr[r["accel"]] = max(terr.get(r["accel"], 0.0), r.get("max_rel_t_err", 0.0))
         for k, (n, w, d, _) in tot.items():
             wrong[k] = w / n if n else 0.0
             disagree[k] = d / n if n else 0.0
@@ -123,8 +124,8 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
         if r.get("ratio_to_embree") and r["accel"] not in speed:
             speed[r["accel"]] = r["ratio_to_embree"]
 
-    panels = 2 if srecs else 1
-    fig, axes = plt.subplots(1, panels, figsize=(6.5 * panels, 4.8), squeeze=False)
+    panels = 1 + (1 if terr else 0) + (1 if srecs else 0)
+    fig, axes = plt.subplots(1, panels, figsize=(6.0 * panels, 4.8), squeeze=False)
     ax = axes[0][0]
     floor = 1e-7
     for k in sorted(speed):
@@ -140,12 +141,27 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axvline(floor, color="lightgray", lw=0.8)
-    ax.set_xlabel(f"rays answered differently from Embree (fraction; {source}; 0 drawn at {floor:g})")
+    ax.set_xlabel(f"fraction of rays answered differently from Embree\n({source}, ties included; 0 drawn at {floor:g})")
     ax.set_ylabel("speed: ratio to Embree (geomean, 1 thread)")
-    ax.set_title("Speed against accuracy")
+    ax.set_title("Speed against accuracy" + (" (wrong = oracle says the accelerator erred)" if wrong else ""), fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    if srecs:
+    if terr:
         ax = axes[0][1]
+        for k in sorted(terr):
+            if k not in speed:
+                continue
+            x = max(terr[k], 1e-9)
+            ax.scatter([x], [speed[k]], s=40, zorder=3)
+            ax.annotate(k if len(k) < 40 else k[:38] + "..", (x, speed[k]), fontsize=7, xytext=(4, 3),
+                        textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("largest relative hit-distance difference from Embree\n(raylab verify, rays where both hit)")
+        ax.set_ylabel("speed: ratio to Embree")
+        ax.set_title("Speed against distance accuracy", fontsize=10)
+        ax.grid(True, which="both", alpha=0.3)
+    if srecs:
+        ax = axes[0][panels - 1]
         for k in sorted(leaks):
             if k not in speed:
                 continue

@@ -20,12 +20,12 @@ mkdir -p "$OUT/equal_time"
 case "$PRESET" in
   quick)
     SWEEP_SCENE="terrain:n=96"
-    SWEEP_ARGS=(--rays primary,random --threads 1 --size 128x128 --random-rays 32768 --repeats 5 --build-repeats 1)
+    SWEEP_ARGS=(--rays primary,random --threads 1 --size 256x256 --random-rays 65536 --repeats 5 --build-repeats 1)
     SCALE="soup:n=1000,10000,100000,1000000"
     SCALE_ARGS=(--rays primary,random --threads 1 --size 128x128 --random-rays 32768 --repeats 5 --build-repeats 1)
     SCALE_ACCELS="embree,bvh,kdtree,grid,hashgrid,grid2"
     VERIFY_SCENES=("cornell" "terrain:n=96" "sphereflake:level=2,segments=12")
-    VERIFY_RAYS=32768
+    VERIFY_RAYS=16384
     RENDER_SCENE="sphereflake:level=2,segments=12"; RENDER_SIZE=96x96; RENDER_SPPS="1 2 4 8 16 32 64"; REF_SPP=2048
     ;;
   full)
@@ -50,7 +50,7 @@ step "verify"
 i=0
 for s in "${VERIFY_SCENES[@]}"; do
   # Exit code 1 = disagreements found: recorded in the JSON, not a failure of the run.
-  $RAYLAB verify --scene "$s" --accel all --ray-sets primary,diffuse,shadow,random --rays $VERIFY_RAYS \
+  $RAYLAB verify --scene "$s" --accel "all;bvh:layout=bvh2,tri=mt" --ray-sets primary,diffuse,shadow,random --rays $VERIFY_RAYS \
     --json "$OUT/verify_$i.json" > "$OUT/verify_$i.txt" || [ $? -eq 1 ]
   i=$((i + 1))
 done
@@ -60,7 +60,7 @@ $RAYLAB bench --scene "$SWEEP_SCENE" --accel grid,hashgrid,grid2 --sweep density
   "${SWEEP_ARGS[@]}" --json "$OUT/sweep_grid_density.json" > "$OUT/sweep_grid_density.txt"
 $RAYLAB bench --scene "$SWEEP_SCENE" --accel kdtree --sweep ct=1,2.5,5,10,15,20,40,80 \
   "${SWEEP_ARGS[@]}" --json "$OUT/sweep_kdtree_ct.json" > "$OUT/sweep_kdtree_ct.txt"
-$RAYLAB bench --scene "$SWEEP_SCENE" --accel bvh:layout=bvh2,bvh --sweep leaf=1,2,4,8,16 \
+$RAYLAB bench --scene "$SWEEP_SCENE" --accel bvh:layout=bvh2,bvh --sweep leaf=1,2,4,8,16,32 \
   "${SWEEP_ARGS[@]}" --json "$OUT/sweep_bvh_leaf.json" > "$OUT/sweep_bvh_leaf.txt"
 
 step "scaling ($SCALE)"
