@@ -125,7 +125,9 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
             speed[r["accel"]] = r["ratio_to_embree"]
 
     panels = 1 + (1 if terr else 0) + (1 if srecs else 0)
-    fig, axes = plt.subplots(1, panels, figsize=(6.0 * panels, 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, panels, figsize=(6.0 * panels, 4.8), squeeze=False, constrained_layout=True)
+    names = sorted(set(speed) | set(disagree) | set(terr) | set(leaks))
+    colour = {k: f"C{i % 10}" for i, k in enumerate(names)}
     ax = axes[0][0]
     floor = 1e-7
     for k in sorted(speed):
@@ -133,7 +135,7 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
             continue
         y = speed[k]
         x = max(disagree[k], floor)
-        ax.scatter([x], [y], s=40, zorder=3)
+        ax.scatter([x], [y], s=40, zorder=3, color=colour[k])
         label = k if len(k) < 40 else k[:38] + ".."
         if k in wrong:
             label += f"  (wrong {wrong[k]:.1e})" if wrong[k] > 0 else "  (wrong 0)"
@@ -151,7 +153,7 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
             if k not in speed:
                 continue
             x = max(terr[k], 1e-9)
-            ax.scatter([x], [speed[k]], s=40, zorder=3)
+            ax.scatter([x], [speed[k]], s=40, zorder=3, color=colour[k])
             ax.annotate(k if len(k) < 40 else k[:38] + "..", (x, speed[k]), fontsize=7, xytext=(4, 3),
                         textcoords="offset points")
         ax.set_xscale("log")
@@ -166,7 +168,7 @@ def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, hea
             if k not in speed:
                 continue
             x = max(leaks[k], 0.5)
-            ax.scatter([x], [speed[k]], s=40, zorder=3)
+            ax.scatter([x], [speed[k]], s=40, zorder=3, color=colour[k])
             ax.annotate(k, (x, speed[k]), fontsize=7, xytext=(4, 3), textcoords="offset points")
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -339,11 +341,16 @@ def chart_equal_time(render_files, out, written):
     return True
 
 
+def fmt_ms(ms):
+    return f"{ms:,.0f}" if ms >= 100 else f"{ms:.3g}"
+
+
 def markdown_table(bench, header):
     recs = single_thread(bench)
     lines = [f"Quick preset, {header.get('cpu', '?')}, Embree {header.get('embree', '?')}, revision "
              f"{header.get('revision', '?')}, {header.get('date', '?')}; 1 thread; Mrays/s (ratio to Embree "
-             "measured in the same process).", ""]
+             "timed back to back with each accelerator in the same process, so the embree row is a separate "
+             "measurement).", ""]
     sets = []
     for r in recs:
         if r["ray_set"] not in sets:
@@ -362,8 +369,29 @@ def markdown_table(bench, header):
         for s in sets:
             r = rs.get(s)
             cells.append(f"{r['mrays_per_s']:.2f} ({r['ratio_to_embree']:.2f})" if r else "")
-        lines.append(f"| {scene} | {any_r['triangles']} | {acc} | {any_r['build_ms']:.1f} | "
+        lines.append(f"| {scene} | {any_r['triangles']} | {acc} | {fmt_ms(any_r['build_ms'])} | "
                      f"{any_r['bytes_per_triangle']:.0f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def markdown_scaling_table(recs):
+    recs = [r for r in single_thread(recs) if r["ray_set"] == "random"]
+    if not recs:
+        return ""
+    sizes = sorted({r["triangles"] for r in recs})
+    accels = []
+    for r in recs:
+        if r["accel"] not in accels:
+            accels.append(r["accel"])
+    lines = ["", f"Scaling ({family(recs[0]['scene'])}, random rays, 1 thread): build ms / ns per ray (ratio to Embree).", "",
+             "| accel | " + " | ".join(f"{n:,} tris" for n in sizes) + " |", "|---|" + "---:|" * len(sizes)]
+    for acc in accels:
+        cells = []
+        for n in sizes:
+            r = next((r for r in recs if r["accel"] == acc and r["triangles"] == n), None)
+            cells.append(f"{fmt_ms(r['build_ms'])} / {1e3 / r['mrays_per_s']:.0f} ({r['ratio_to_embree']:.2f})"
+                         if r and r["mrays_per_s"] > 0 else "")
+        lines.append(f"| {acc} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -406,6 +434,8 @@ def main():
             os.makedirs(os.path.dirname(os.path.abspath(a.table)), exist_ok=True)
             with open(a.table + ".tmp", "w") as f:
                 f.write(markdown_table(bench, header))
+                if a.scaling:
+                    f.write(markdown_scaling_table(records(a.scaling)))
             os.replace(a.table + ".tmp", a.table)
     else:
         skipped += ["speed_vs_accuracy", "build_vs_trace"]
