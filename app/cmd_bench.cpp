@@ -75,7 +75,7 @@ std::string csv_path_for(const std::string& json) {
 
 Runner add_bench(CLI::App& app) {
   struct Opts {
-    std::string accel = "embree,bvh", rays = "primary,random", threads = "1", size = "512x512", json, csv, preset;
+    std::string accel = "embree,bvh", rays = "primary,random", threads, size = "512x512", json, csv, preset;
     std::vector<std::string> scenes, scales, sweeps;
     size_t random_rays = 262144, brute_max_tris = 0;
     int repeats = 5, build_repeats = 1;
@@ -91,7 +91,7 @@ Runner add_bench(CLI::App& app) {
   cmd->add_option("--preset", o->preset, "quick or full: defaults for the options not given");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
   cmd->add_option("--rays", o->rays, "ray sets: primary, diffuse, shadow, random")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "thread counts, comma separated")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "thread counts, comma separated (default: 1 and all cores)");
   cmd->add_option("--size", o->size, "primary rays: image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--random-rays", o->random_rays, "number of random rays")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
   cmd->add_option("--repeats", o->repeats, "timed trace repeats (median, min and max reported)")->capture_default_str()->check(CLI::Range(1, 1000));
@@ -117,6 +117,7 @@ Runner add_bench(CLI::App& app) {
       if (unset("--build-repeats")) o->build_repeats = p.build_repeats;
       if (unset("--brute-max-tris")) o->brute_max_tris = p.brute_max_tris;
     }
+    if (o->threads.empty()) o->threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
     auto specs = expand_accelerator_list(o->accel);
     for (const auto& sweep : o->sweeps) {
       const auto eq = sweep.find('=');

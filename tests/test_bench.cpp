@@ -214,7 +214,7 @@ TEST(Bench, BadPresetsAndOptionsExitWith2) {
       {"bench --frobnicate --json " + json, "frobnicate"},
       {"bench --scale soup --json " + json, "expected FAMILY:PARAM=v1,v2"},
       {"bench --scale soup:n= --json " + json, "expected FAMILY:PARAM=v1,v2"},
-      {"bench --scale soup:n=1x --json " + json, "n"},
+      {"bench --scale soup:n=1x --json " + json, "not an integer"},
       {"bench --preset quick --repeats 0 --json " + json, "repeats"},
       {"bench --build-repeats 0 --json " + json, "build-repeats"},
   };
