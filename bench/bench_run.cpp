@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -117,7 +119,15 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   for (const auto& spec : accel_specs) {
     if (stopped()) break;
     say(fmt::format("building {}", spec));
-    Built b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+    Built b;
+    try {
+      b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+    } catch (const std::bad_alloc&) {
+      // Scaling runs go as far as memory allows: a structure that does not
+      // fit is left out of this scene, the others still run.
+      std::fprintf(stderr, "bench: %s on %s: out of memory, skipped\n", spec.c_str(), scene.name.c_str());
+      continue;
+    }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
     for (size_t s = 0; s < sets.size() && !stopped(); ++s) {
       const RaySet& set = sets[s];
