@@ -1,42 +1,123 @@
 #include <unistd.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <memory>
 
 #include <fmt/format.h>
 
 #include "accel/registry.h"
+#include "accel/util/atomic_file.h"
 #include "app/commands.h"
 #include "bench/bench_run.h"
 #include "bench/report.h"
+#include "bench/trace.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {
 
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_sigint(int) {
+  g_stop.store(true);
+  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends the process at once
+}
+
+// Presets: defaults for every option not given on the command line.
+struct Preset {
+  std::string scenes, accel, rays, threads, size;
+  size_t random_rays;
+  int repeats, build_repeats;
+  size_t brute_max_tris;
+};
+
+Preset find_preset(const std::string& name) {
+  const std::string all_threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
+  if (name == "quick")
+    return {"cornell;terrain:n=96;sphereflake:level=2,segments=12", "all;bvh:layout=bvh2,tri=mt", "primary,diffuse,shadow,random", all_threads,
+            "192x192", 49152, 5, 3, 5000};
+  if (name == "full")
+    return {"cornell;terrain:n=256;sphereflake:level=3;city;grass;soup:n=100000", "all;bvh:layout=bvh2,tri=mt", "primary,diffuse,shadow,random",
+            all_threads, "512x512", 262144, 7, 3, 5000};
+  throw std::invalid_argument(fmt::format("unknown preset '{}' (presets: quick, full)", name));
+}
+
+// "FAMILY:PARAM=v1,v2,..." (fixed parameters may precede PARAM:
+// "sphereflake:segments=8,level=1,2,3") -> one scene spec per value.
+std::vector<std::string> expand_scale(const std::string& text) {
+  const auto colon = text.find(':');
+  const auto eq = text.rfind('=');
+  if (colon == std::string::npos || eq == std::string::npos || eq < colon)
+    throw std::invalid_argument(fmt::format("--scale {}: expected FAMILY:PARAM=v1,v2,... (e.g. soup:n=1000,10000)", text));
+  const std::string head = text.substr(0, eq);  // "family:fixed=1,param"
+  const auto last_comma = head.rfind(',');
+  const std::string param = head.substr(last_comma == std::string::npos || last_comma < colon ? colon + 1 : last_comma + 1);
+  const std::string prefix = head.substr(0, head.size() - param.size());  // "family:" or "family:fixed=1,"
+  const auto values = parse_name_list(text.substr(eq + 1));
+  if (param.empty() || values.empty())
+    throw std::invalid_argument(fmt::format("--scale {}: expected FAMILY:PARAM=v1,v2,... (e.g. soup:n=1000,10000)", text));
+  std::vector<std::string> out;
+  for (const auto& v : values) out.push_back(prefix + param + "=" + v);
+  return out;
+}
+
+std::string csv_path_for(const std::string& json) {
+  const auto dot = json.rfind('.');
+  const auto slash = json.rfind('/');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) return json.substr(0, dot) + ".csv";
+  return json + ".csv";
+}
+
+}  // namespace
+
 Runner add_bench(CLI::App& app) {
   struct Opts {
-    std::string scene = "cornell", accel = "embree,bvh", rays = "primary,random", threads = "1", size = "512x512", json;
-    std::vector<std::string> sweeps;
-    size_t random_rays = 262144;
-    int repeats = 5;
+    std::string accel = "embree,bvh", rays = "primary,random", threads, size = "512x512", json, csv, preset;
+    std::vector<std::string> scenes, scales, sweeps;
+    size_t random_rays = 262144, brute_max_tris = 0;
+    int repeats = 5, build_repeats = 1;
     uint64_t seed = 1;
     bool quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("bench", "time accelerators on the same rays, as ratios to Embree");
-  cmd->add_option("--scene", o->scene, "procedural scene spec or mesh file")->capture_default_str();
+  cmd->add_option("--scene", o->scenes,
+                  "scene specs or mesh files (repeatable; ';' or ',' separated lists; default cornell)");
+  cmd->add_option("--scale", o->scales,
+                  "FAMILY:PARAM=v1,v2,...: one scene per value of a size parameter, e.g. soup:n=1000,10000 (repeatable)");
+  cmd->add_option("--preset", o->preset, "quick or full: defaults for the options not given");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
   cmd->add_option("--rays", o->rays, "ray sets: primary, diffuse, shadow, random")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "thread counts, comma separated")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "thread counts, comma separated (default: 1 and all cores)");
   cmd->add_option("--size", o->size, "primary rays: image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--random-rays", o->random_rays, "number of random rays")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
-  cmd->add_option("--repeats", o->repeats, "timed repeats (median reported)")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--repeats", o->repeats, "timed trace repeats (median, min and max reported)")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--build-repeats", o->build_repeats, "builds per accelerator (median reported)")->capture_default_str()->check(CLI::Range(1, 100));
+  cmd->add_option("--brute-max-tris", o->brute_max_tris, "skip brute on scenes with more triangles (0 = never skip)")->capture_default_str();
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   cmd->add_option("--sweep", o->sweeps, "PARAM=v1,v2,...: one run per value for every accelerator with PARAM (repeatable)");
-  cmd->add_option("--json", o->json, "write records to this JSON file");
+  cmd->add_option("--json", o->json, "write records to this JSON file (rewritten after every cell)");
+  cmd->add_option("--csv", o->csv, "write records to this CSV file (default: next to --json, .csv)");
   cmd->add_flag("--quiet", o->quiet, "no progress line");
 
-  return [o]() {
+  return [o, cmd]() {
+    if (!o->preset.empty()) {
+      const Preset p = find_preset(o->preset);
+      auto unset = [&](const char* name) { return cmd->count(name) == 0; };
+      if (unset("--scene") && unset("--scale")) o->scenes = {p.scenes};
+      if (unset("--accel")) o->accel = p.accel;
+      if (unset("--rays")) o->rays = p.rays;
+      if (unset("--threads")) o->threads = p.threads;
+      if (unset("--size")) o->size = p.size;
+      if (unset("--random-rays")) o->random_rays = p.random_rays;
+      if (unset("--repeats")) o->repeats = p.repeats;
+      if (unset("--build-repeats")) o->build_repeats = p.build_repeats;
+      if (unset("--brute-max-tris")) o->brute_max_tris = p.brute_max_tris;
+    }
+    if (o->threads.empty()) o->threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
     auto specs = expand_accelerator_list(o->accel);
     for (const auto& sweep : o->sweeps) {
       const auto eq = sweep.find('=');
@@ -44,30 +125,88 @@ Runner add_bench(CLI::App& app) {
         throw std::invalid_argument(fmt::format("--sweep {}: expected PARAM=v1,v2,...", sweep));
       specs = apply_sweep(specs, sweep.substr(0, eq), parse_name_list(sweep.substr(eq + 1)));
     }
+    std::vector<std::string> scene_specs;
+    for (const auto& s : o->scenes)
+      for (const auto& one : split_spec_list(s)) scene_specs.push_back(one);
+    for (const auto& s : o->scales)
+      for (const auto& one : expand_scale(s)) scene_specs.push_back(one);
+    if (scene_specs.empty()) scene_specs.push_back("cornell");
+
     BenchOptions bo;
     bo.ray_sets = parse_name_list(o->rays);
     bo.threads = parse_int_list(o->threads, "thread count");
     std::tie(bo.width, bo.height) = parse_size(o->size);
     bo.random_rays = o->random_rays;
     bo.repeats = o->repeats;
+    bo.build_repeats = o->build_repeats;
+    bo.brute_max_triangles = o->brute_max_tris;
     bo.seed = o->seed;
-    const Scene scene = load_scene(o->scene);
-    const bool tty = !o->quiet && isatty(fileno(stderr));
-    BenchProgress progress;
-    if (tty)
-      progress = [](const std::string& m) {
-        std::fprintf(stderr, "\r\033[K%s", m.c_str());
-        std::fflush(stderr);
-      };
-    const auto records = run_bench(scene, specs, bo, progress);
-    if (tty) std::fprintf(stderr, "\r\033[K");
-    std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
-                format_bench_table(records).c_str());
-    std::printf("%s", format_build_summary(records).c_str());
-    if (!o->json.empty()) {
-      nlohmann::json recs = nlohmann::json::array();
-      for (const auto& r : records) recs.push_back(r.to_json());
-      write_json_report(o->json, report_header("bench"), recs);
+    bo.stop = &g_stop;
+    const std::string csv = !o->csv.empty() ? o->csv : (o->json.empty() ? std::string() : csv_path_for(o->json));
+
+    nlohmann::json header = report_header("bench");
+    header["preset"] = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset);
+    header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
+                         {"threads", bo.threads},     {"size", o->size},         {"random_rays", bo.random_rays},
+                         {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
+                         {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed}};
+    std::vector<BenchRecord> all;
+    auto save = [&](bool complete) {
+      if (!o->json.empty()) {
+        nlohmann::json recs = nlohmann::json::array();
+        for (const auto& r : all) recs.push_back(r.to_json());
+        nlohmann::json h = header;
+        h["complete"] = complete;
+        write_json_report(o->json, h, recs);
+      }
+      if (!csv.empty()) write_file_atomically(csv, bench_csv(all));
+    };
+
+    const bool show = !o->quiet;
+    const bool tty = show && isatty(fileno(stderr));
+    g_stop.store(false);
+    auto previous = std::signal(SIGINT, on_sigint);
+    size_t done_scenes = 0;
+    for (const auto& spec : scene_specs) {
+      if (g_stop.load()) break;
+      if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
+      const Scene scene = load_scene(spec);
+      const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
+      const size_t cells = cell_specs.size() * bo.ray_sets.size() * bo.threads.size();
+      if (show && cell_specs.size() < specs.size())
+        std::fprintf(stderr, "%sbench: %s: brute skipped (%zu triangles > --brute-max-tris %zu)\n", tty ? "\r\033[K" : "",
+                     scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
+      size_t done = 0;
+      BenchProgress progress;
+      if (tty)
+        progress = [&](const std::string& m) {
+          std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu] %s", done_scenes + 1, scene_specs.size(), done + 1,
+                       cells, m.c_str());
+          std::fflush(stderr);
+        };
+      const auto records = run_bench(scene, specs, bo, progress, [&](const BenchRecord& r) {
+        ++done;
+        all.push_back(r);
+        save(false);
+        if (show && !tty)
+          std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
+                       done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
+                       r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
+      });
+      if (tty) std::fprintf(stderr, "\r\033[K");
+      std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
+                  format_bench_table(records).c_str());
+      std::printf("%s", format_build_summary(records).c_str());
+      std::fflush(stdout);
+      ++done_scenes;
+    }
+    std::signal(SIGINT, previous == SIG_ERR ? SIG_DFL : previous);
+    const bool interrupted = g_stop.load();
+    save(!interrupted);
+    if (interrupted) {
+      std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", all.size(),
+                   o->json.empty() ? "" : " in ", o->json.c_str());
+      return 130;
     }
     return 0;
   };

@@ -9,6 +9,7 @@
 #include "accel/registry.h"
 #include "accel/util/timer.h"
 #include "app/commands.h"
+#include "bench/report.h"
 #include "scenes/scene_registry.h"
 #include "tracer/integrator.h"
 
@@ -16,7 +17,7 @@ namespace raylab::cli {
 
 Runner add_render(CLI::App& app) {
   struct Opts {
-    std::string scene = "cornell", positional_scene, accel = "bvh", size, out;
+    std::string scene = "cornell", positional_scene, accel = "bvh", size, out, json;
     int spp = 64, threads = 0, max_depth = 64;
     uint64_t seed = 1;
     bool quiet = false;
@@ -33,6 +34,7 @@ Runner add_render(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-depth", o->max_depth, "maximum path length")->capture_default_str()->check(CLI::Range(1, 1024));
+  cmd->add_option("--json", o->json, "also write the timings (build, render, wall time) to this JSON file");
   cmd->add_flag("--quiet", o->quiet, "no progress line");
 
   return [o]() {
@@ -62,13 +64,32 @@ Runner add_render(CLI::App& app) {
       const std::string ext = out.size() >= 4 ? out.substr(out.size() - 4) : "";
       if (ext != ".png" && ext != ".pfm") throw std::invalid_argument(fmt::format("--out {}: use a .png or .pfm file name", out));
     }
+    Timer wall;
     const BuildStats bs = accel->build(scene.mesh);
     const RenderResult r = render(scene, *accel, rs);
+    const double wall_s = wall.seconds();
     write_image(r.image, out);
     const double mrays = (r.rays + r.shadow_rays) / std::max(r.seconds, 1e-9) * 1e-6;
     std::printf("%s: %zu triangles (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
                 scene.name.c_str(), scene.num_triangles(), load_ms, accel->spec().c_str(), bs.build_ms, rs.width,
                 rs.height, rs.spp, r.seconds, mrays, out.c_str());
+    if (!o->json.empty()) {
+      const nlohmann::json rec = {{"scene", scene.name},
+                                  {"triangles", scene.num_triangles()},
+                                  {"accel", accel->spec()},
+                                  {"width", rs.width},
+                                  {"height", rs.height},
+                                  {"spp", rs.spp},
+                                  {"seed", rs.seed},
+                                  {"build_ms", bs.build_ms},
+                                  {"render_s", r.seconds},
+                                  {"wall_s", wall_s},
+                                  {"rays", r.rays},
+                                  {"shadow_rays", r.shadow_rays},
+                                  {"mrays_per_s", mrays},
+                                  {"image", out}};
+      write_json_report(o->json, report_header("render"), nlohmann::json::array({rec}));
+    }
     return 0;
   };
 }

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -80,11 +82,25 @@ Built build_accel(const std::string& spec, const Scene& scene, int repeats) {
 
 }  // namespace
 
-std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
-                                   const BenchOptions& o, const BenchProgress& progress) {
+std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& accel_specs, size_t triangles,
+                                               const BenchOptions& o) {
+  std::vector<std::string> out;
+  for (const auto& spec : accel_specs) {
+    const bool brute = spec == "brute" || spec.rfind("brute:", 0) == 0;
+    if (brute && o.brute_max_triangles > 0 && triangles > o.brute_max_triangles) continue;
+    out.push_back(spec);
+  }
+  return out;
+}
+
+std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& all_specs,
+                                   const BenchOptions& o, const BenchProgress& progress,
+                                   const BenchRecordSink& on_record) {
   auto say = [&](const std::string& m) {
     if (progress) progress(m);
   };
+  auto stopped = [&] { return o.stop && o.stop->load(); };
+  const std::vector<std::string> accel_specs = bench_specs_for_scene(all_specs, scene.num_triangles(), o);
   say("building embree (reference)");
   Built embree = build_accel(o.embree_spec, scene, o.build_repeats);
 
@@ -101,10 +117,19 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
 
   std::vector<BenchRecord> records;
   for (const auto& spec : accel_specs) {
+    if (stopped()) break;
     say(fmt::format("building {}", spec));
-    Built b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+    Built b;
+    try {
+      b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+    } catch (const std::bad_alloc&) {
+      // Scaling runs go as far as memory allows: a structure that does not
+      // fit is left out of this scene, the others still run.
+      std::fprintf(stderr, "bench: %s on %s: out of memory, skipped\n", spec.c_str(), scene.name.c_str());
+      continue;
+    }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
-    for (size_t s = 0; s < sets.size(); ++s) {
+    for (size_t s = 0; s < sets.size() && !stopped(); ++s) {
       const RaySet& set = sets[s];
       TraceOutput out;
       trace_set(accel, set, 1, out);
@@ -112,6 +137,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       TraversalStats ts;
       if (o.instrumented) trace_set(accel, set, 1, out, &ts);
       for (int threads : o.threads) {
+        if (stopped()) break;
         say(fmt::format("tracing {} {} rays with {} ({} thread{})", set.rays.size(), set.name, b.spec, threads,
                         threads == 1 ? "" : "s"));
         // Embree and the accelerator timed back to back, so drift on this
@@ -143,10 +169,43 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.max_depth = b.stats.max_depth;
         r.extra = b.stats.extra;
         records.push_back(r);
+        if (on_record) on_record(r);
       }
     }
   }
   return records;
+}
+
+std::string bench_csv(const std::vector<BenchRecord>& records) {
+  static const char* const kColumns[] = {"scene",       "triangles",   "accel",          "ray_set",          "threads",
+                                         "rays",        "build_ms",    "bytes",          "bytes_per_triangle",
+                                         "mrays_per_s", "mrays_min",   "mrays_max",      "embree_mrays_per_s",
+                                         "ratio_to_embree", "embree_agreement", "nodes_per_ray", "tris_per_ray",
+                                         "sah_cost",    "nodes",       "leaves",         "max_depth"};
+  auto quote = [](const std::string& v) {
+    if (v.find_first_of(",\"\n") == std::string::npos) return v;
+    std::string q = "\"";
+    for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  std::string s;
+  for (const char* c : kColumns) s += std::string(s.empty() ? "" : ",") + c;
+  s += "\n";
+  for (const auto& r : records) {
+    const nlohmann::json j = r.to_json();
+    std::string line;
+    for (const char* c : kColumns) {
+      const auto& v = j.at(c);
+      std::string cell;
+      if (v.is_string()) cell = quote(v.get<std::string>());
+      else if (v.is_null()) cell = "";
+      else if (v.is_number_float()) cell = fmt::format("{:.9g}", v.get<double>());
+      else cell = v.dump();
+      line += std::string(c == kColumns[0] ? "" : ",") + cell;
+    }
+    s += line + "\n";
+  }
+  return s;
 }
 
 std::string format_bench_table(const std::vector<BenchRecord>& records) {

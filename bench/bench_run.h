@@ -2,6 +2,7 @@
 // The timing path of `raylab bench`: build every accelerator on the scene,
 // trace the same ray sets with each (Embree always included, in the same
 // process), median of repeats, ratios to Embree from this run.
+#include <atomic>
 #include <functional>
 #include <map>
 #include <string>
@@ -23,6 +24,12 @@ struct BenchOptions {
   uint64_t seed = 1;
   bool instrumented = true;  // one extra instrumented pass for per-ray counters
   std::string embree_spec = "embree";
+  // Accelerators named "brute" are skipped on scenes with more triangles than
+  // this (their trace time grows with triangles x rays); 0 = never skip.
+  size_t brute_max_triangles = 0;
+  // Polled between cells: when it becomes true run_bench returns the records
+  // finished so far (Ctrl-C in `raylab bench`).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct BenchRecord {
@@ -44,9 +51,20 @@ struct BenchRecord {
 };
 
 using BenchProgress = std::function<void(const std::string& message)>;
+using BenchRecordSink = std::function<void(const BenchRecord& record)>;
 
+// Records in the order accelerator x ray set x threads; on_record (when set)
+// is called as soon as each cell is finished, so callers can save them.
 std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
-                                   const BenchOptions& options, const BenchProgress& progress = {});
+                                   const BenchOptions& options, const BenchProgress& progress = {},
+                                   const BenchRecordSink& on_record = {});
+
+// The specs run_bench times on this scene (brute dropped above brute_max_triangles).
+std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& accel_specs, size_t triangles,
+                                               const BenchOptions& options);
+
+// CSV with one row per record (the flat fields of to_json, extra omitted).
+std::string bench_csv(const std::vector<BenchRecord>& records);
 
 // Fixed-width table for the terminal.
 std::string format_bench_table(const std::vector<BenchRecord>& records);

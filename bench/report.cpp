@@ -52,6 +52,11 @@ nlohmann::json report_header(const std::string& command) {
   h["cpu"] = cpu_model();
   h["hardware_threads"] = hardware_threads();
   h["embree"] = embree_version_string();
+  {
+    const std::string e = h["embree"].get<std::string>();
+    const auto sp = e.rfind(' ');
+    h["embree_isa"] = sp == std::string::npos ? std::string("unknown") : e.substr(sp + 1);
+  }
   h["compiler"] = std::string("g++ ") + __VERSION__;
   h["flags"] = RAYLAB_CXX_FLAGS;
   h["revision"] = git_revision();
