@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cfloat>
 #include <cmath>
 #include <chrono>
 #include <cstring>
@@ -100,13 +101,15 @@ class EmbreeAccel final : public Accelerator {
       h = Hit{};
       if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
       RTCRayHit rh;
-      const float shift = fill_ray(r, rh.ray);
+      const RayMap map = fill_ray(r, rh.ray);
+      if (!map.ok) continue;
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene_, &ctx, &rh);
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-        h.t = rh.ray.tfar + shift;
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && !std::isnan(rh.ray.tfar)) {
+        // Clamped to the ray's range: the mapping back may round just outside it.
+        h.t = std::clamp(rh.ray.tfar * map.scale + map.shift, r.tmin, r.tmax);
         h.u = rh.hit.u;
         h.v = rh.hit.v;
         h.prim = rh.hit.primID;
@@ -124,7 +127,7 @@ class EmbreeAccel final : public Accelerator {
       occ[i] = 0;
       if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
       RTCRay ray;
-      (void)fill_ray(r, ray);
+      if (!fill_ray(r, ray).ok) continue;
       rtcOccluded1(scene_, &ctx, &ray);
       occ[i] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
     }
@@ -132,34 +135,64 @@ class EmbreeAccel final : public Accelerator {
   }
 
  private:
-  // Embree requires tnear >= 0 (its debug builds assert it, release builds
-  // give undefined results). A segment that starts behind the origin
-  // (tmin < 0) is traced from the point at tmin instead, with distances
-  // shifted back by tmin afterwards (returned by the function, 0 otherwise);
-  // the new origin is rounded to float, so distances can differ in the last
-  // bits from a structure that keeps the original origin. tmin = -inf cannot
-  // be shifted: Embree then sees only the part t >= 0 (a documented limit).
-  static float fill_ray(const Ray& r, RTCRay& ray) {
-    float shift = 0.0f;
+  // Embree's valid ray (asserted in its debug builds, undefined otherwise):
+  // 0 <= tnear, and every origin and direction component within
+  // FLT_LARGE = 1.844e18 in magnitude. Our rays are wider, so fill_ray maps
+  // them: a segment that starts behind the origin (tmin < 0) is traced from
+  // the point at tmin (rounded to float, so distances can differ in the last
+  // bits from a structure that keeps the original origin), and a direction
+  // beyond FLT_LARGE is scaled by a power of two (exact), distances by the
+  // inverse, denormal components become zeros. Hit distances map back as
+  // t = t_embree * scale + shift (a NaN distance from Embree is a miss). Rays
+  // whose origin (after the shift) is beyond FLT_LARGE cannot be given to
+  // Embree at all: the adapter reports them as misses (a documented limit of
+  // the reference; no scene of ours reaches 1e18). tmin = -inf cannot be
+  // shifted: Embree then sees only the part t >= 0.
+  struct RayMap {
+    float shift = 0.0f, scale = 1.0f;
+    bool ok = true;
+  };
+  static constexpr float kEmbreeLarge = 1.8e18f;  // just below Embree's FLT_LARGE
+
+  static RayMap fill_ray(const Ray& r, RTCRay& ray) {
+    RayMap m;
     float org[3] = {r.org.x(), r.org.y(), r.org.z()};
-    if (r.tmin < 0.0f && std::isfinite(r.tmin)) {
-      shift = r.tmin;
+    float dir[3] = {r.dir.x(), r.dir.y(), r.dir.z()};
+    float tmin = r.tmin, tmax = r.tmax;
+    if (tmin < 0.0f && std::isfinite(tmin)) {
+      m.shift = tmin;
       for (int a = 0; a < 3; ++a)
-        org[a] = static_cast<float>(static_cast<double>(r.org[a]) + static_cast<double>(r.tmin) * r.dir[a]);
+        org[a] = static_cast<float>(static_cast<double>(r.org[a]) + static_cast<double>(tmin) * r.dir[a]);
+      tmax -= tmin;
+      tmin = 0.0f;
     }
+    // Denormal components become signed zeros: Embree's kernels run with
+    // denormals flushed and return NaN distances for them (found by fuzz_rays).
+    for (float& d : dir)
+      if (std::fabs(d) < FLT_MIN) d = std::copysign(0.0f, d);
+    const float dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
+    if (dmax > kEmbreeLarge) {
+      int e = 0;
+      std::frexp(dmax / kEmbreeLarge, &e);  // 2^e > dmax / large
+      for (float& d : dir) d = std::ldexp(d, -e);
+      tmin = std::ldexp(tmin, e);
+      tmax = std::ldexp(tmax, e);
+      m.scale = std::ldexp(1.0f, -e);
+    }
+    for (float o : org) m.ok &= std::fabs(o) <= kEmbreeLarge;
     ray.org_x = org[0];
     ray.org_y = org[1];
     ray.org_z = org[2];
-    ray.tnear = std::max(0.0f, r.tmin - shift);
-    ray.dir_x = r.dir.x();
-    ray.dir_y = r.dir.y();
-    ray.dir_z = r.dir.z();
+    ray.tnear = std::max(0.0f, tmin);
+    ray.dir_x = dir[0];
+    ray.dir_y = dir[1];
+    ray.dir_z = dir[2];
     ray.time = 0.0f;
-    ray.tfar = r.tmax - shift;  // tmax = +inf stays +inf
+    ray.tfar = tmax;  // tmax = +inf stays +inf
     ray.mask = 0xFFFFFFFFu;
     ray.id = 0;
     ray.flags = 0;
-    return shift;
+    return m;
   }
 
   static void on_error(void* user, RTCError code, const char* msg) {
