@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The benchmark run behind `make bench`: the bench matrix, verify, parameter
+# The benchmark run behind `make bench`: the bench matrix, verify, watertight stress, parameter
 # sweeps, scaling and equal-time renders, then the charts.
 #
 #   scripts/run_bench.sh [quick|full]      (default quick)
@@ -54,6 +54,11 @@ for s in "${VERIFY_SCENES[@]}"; do
     --json "$OUT/verify_$i.json" > "$OUT/verify_$i.txt" || [ $? -eq 1 ]
   i=$((i + 1))
 done
+
+step "stress (watertight scenarios: leaks per accelerator, for the speed-vs-accuracy chart)"
+# Exit code 1 = a watertight-test accelerator leaked or gave a wrong hit: recorded, and
+# reported by the chart, not a failure of the benchmark run.
+$RAYLAB stress --scenario watertight --json "$OUT/stress.json" > "$OUT/stress.txt" || [ $? -eq 1 ]
 
 step "sweeps"
 $RAYLAB bench --scene "$SWEEP_SCENE" --accel grid,hashgrid,grid2 --sweep density=0.0625,0.125,0.25,0.5,1,2,4,8 \
