@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "accel/registry.h"
+#include "app/check_json.h"
 #include "app/commands.h"
 #include "bench/report.h"
 #include "bench/stress.h"
@@ -13,33 +14,24 @@ namespace raylab::cli {
 
 nlohmann::json stress_record_json(const StressRecord& r) {
   // The keys of `raylab verify` first, then the stress-specific ones.
-  return {{"scene", r.scenario},
-          {"accel", r.accel},
-          {"ray_set", "stress"},
-          {"rays", r.rays},
-          {"hit_miss_disagree", r.hit_miss_disagree},
-          {"prim_disagree", r.prim_disagree},
-          {"ties", r.ties},
-          {"raylab_wrong", r.raylab_wrong},
-          {"embree_wrong", r.embree_wrong},
-          {"occlusion_disagree", r.occlusion_disagree},
-          {"max_rel_t_err", r.max_rel_t_err},
-          {"build_ms", r.build_ms},
-          {"ok", !r.failed()},
-          {"scenario", r.scenario},
-          {"status", r.status},
-          {"error", r.error},
-          {"triangles", r.triangles},
-          {"subsampled", r.subsampled},
-          {"bytes", r.bytes},
-          {"mrays_per_s", r.mrays_per_s},
-          {"embree_mrays_per_s", r.embree_mrays_per_s},
-          {"ratio_to_embree", r.ratio},
-          {"watertight_test", r.watertight_test},
-          {"counts_for_exit", r.counts},
-          {"leak_rays", r.leak_rays},
-          {"leaks", r.leaks},
-          {"leaks_per_million", r.leaks_per_million()}};
+  nlohmann::json j = check_counts_json(r);
+  j["scene"] = r.scenario;
+  j["ray_set"] = "stress";
+  j.update({{"scenario", r.scenario},
+            {"status", r.status},
+            {"error", r.error},
+            {"triangles", r.triangles},
+            {"subsampled", r.subsampled},
+            {"bytes", r.bytes},
+            {"mrays_per_s", r.mrays_per_s},
+            {"embree_mrays_per_s", r.embree_mrays_per_s},
+            {"ratio_to_embree", r.ratio},
+            {"watertight_test", r.watertight_test},
+            {"counts_for_exit", r.counts},
+            {"leak_rays", r.leak_rays},
+            {"leaks", r.leaks},
+            {"leaks_per_million", r.leaks_per_million()}});
+  return j;
 }
 
 Runner add_stress(CLI::App& app) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "accel/registry.h"
+#include "app/check_json.h"
 #include "app/commands.h"
 #include "bench/report.h"
 #include "bench/verify.h"
@@ -12,19 +13,10 @@
 namespace raylab::cli {
 
 nlohmann::json verify_record_json(const VerifyRecord& r) {
-  return {{"scene", r.scene},
-          {"accel", r.accel},
-          {"ray_set", r.ray_set},
-          {"rays", r.rays},
-          {"hit_miss_disagree", r.hit_miss_disagree},
-          {"prim_disagree", r.prim_disagree},
-          {"ties", r.ties},
-          {"raylab_wrong", r.raylab_wrong},
-          {"embree_wrong", r.embree_wrong},
-          {"occlusion_disagree", r.occlusion_disagree},
-          {"max_rel_t_err", r.max_rel_t_err},
-          {"build_ms", r.build_ms},
-          {"ok", !r.failed()}};
+  nlohmann::json j = check_counts_json(r);
+  j["scene"] = r.scene;
+  j["ray_set"] = r.ray_set;
+  return j;
 }
 
 Runner add_verify(CLI::App& app) {
