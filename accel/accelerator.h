@@ -3,9 +3,12 @@
 // rays); every implementation runs a tight non-virtual loop inside.
 //
 // Contract:
-//  - build() may be called once; the mesh must outlive the accelerator.
+//  - build() may be called once (a second call throws std::logic_error); the
+//    mesh must outlive the accelerator. It validates the mesh, then times the
+//    structure's own build_impl(): every structure's build_ms means the same.
 //  - intersect()/occluded() are const and thread-safe: callers may trace
-//    disjoint sub-spans from several threads at once.
+//    disjoint sub-spans from several threads at once. Tracing before
+//    build() reports misses (Embree's adapter throws), never a crash.
 //  - Invalid rays (see ray_is_valid) report a miss / not occluded.
 //  - When `stats` is non-null the instrumented kernel runs and adds its
 //    per-ray counters to *stats (the uninstrumented kernel does no counting).
@@ -13,11 +16,13 @@
 #include <map>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 
-#include "accel/core/hit.h"
-#include "accel/core/ray.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/hit.h"
+#include "base/ray.h"
+#include "base/timer.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 
@@ -38,7 +43,7 @@ struct BuildStats {
 // Per-ray traversal counters accumulated by the instrumented kernels.
 struct TraversalStats {
   uint64_t rays = 0;
-  uint64_t nodes_visited = 0;   // inner + leaf nodes, or grid cells
+  uint64_t nodes_visited = 0;   // nodes whose bounds were tested, or grid cells entered (accel/core/hit_recorder.h)
   uint64_t triangle_tests = 0;
 
   TraversalStats& operator+=(const TraversalStats& o) {
@@ -57,7 +62,17 @@ class Accelerator {
   const std::string& spec() const { return spec_; }
   void set_spec(std::string s) { spec_ = std::move(s); }
 
-  virtual BuildStats build(const TriangleMesh& mesh) = 0;
+  // Validates the mesh (MeshError), builds, and sets build_ms to the time
+  // of build_impl().
+  BuildStats build(const TriangleMesh& mesh) {
+    if (built_) throw std::logic_error("accelerator " + spec_ + ": build() called twice");
+    mesh.validate();
+    built_ = true;
+    const Timer timer;
+    BuildStats s = build_impl(mesh);
+    s.build_ms = timer.ms();
+    return s;
+  }
 
   // Closest hit for every ray: hits[i] receives the result of rays[i].
   virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits,
@@ -79,8 +94,13 @@ class Accelerator {
     return o != 0;
   }
 
+ protected:
+  // The structure's own build, on a validated mesh. build_ms is set by build().
+  virtual BuildStats build_impl(const TriangleMesh& mesh) = 0;
+
  private:
   std::string spec_;
+  bool built_ = false;
 };
 
 }  // namespace raylab

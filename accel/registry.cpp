@@ -1,5 +1,7 @@
 #include "accel/registry.h"
 
+#include <stdexcept>
+
 #include <fmt/format.h>
 
 #include "accel/brute/brute_accel.h"
@@ -21,6 +23,12 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       hashgrid_accelerator_info(),
       grid2_accelerator_info(),
   };
+  static const bool checked = [] {
+    for (const auto& info : registry)
+      if (info.name == kReservedUnknownAccelerator) throw std::logic_error("registry: reserved name registered");
+    return true;
+  }();
+  (void)checked;
   return registry;
 }
 
@@ -38,15 +46,38 @@ std::string known_names() {
   return s;
 }
 
+std::string unknown_name_message(const std::string& name) {
+  return fmt::format("unknown accelerator '{}' (available: {}, or 'all')", name, known_names());
+}
+
 }  // namespace
+
+std::string description_text(const Description& d) {
+  std::string s;
+  for (const auto& [key, value] : d) s += (s.empty() ? "" : " ") + value;
+  return s;
+}
+
+const AcceleratorInfo& accelerator_info(const std::string& name) {
+  const AcceleratorInfo* info = find_info(name);
+  if (!info) throw SpecError(unknown_name_message(name));
+  return *info;
+}
+
+std::vector<std::string> coverage_specs() {
+  std::vector<std::string> out;
+  for (const auto& info : accelerator_registry()) {
+    out.push_back(info.name);
+    for (const auto& c : info.cover) out.push_back(c);
+  }
+  return out;
+}
 
 std::unique_ptr<Accelerator> make_accelerator(const std::string& text) {
   const Spec spec = Spec::parse(text);
-  const AcceleratorInfo* info = find_info(spec.name);
-  if (!info)
-    throw SpecError(fmt::format("unknown accelerator '{}' (available: {}, or 'all')", spec.name, known_names()));
-  const Params params(spec.name, info->params, spec.params);
-  auto accel = info->make(params);
+  const AcceleratorInfo& info = accelerator_info(spec.name);
+  const Params params(spec.name, info.params, spec.params);
+  auto accel = info.make(params);
   accel->set_spec(spec.to_string());
   return accel;
 }
@@ -59,12 +90,10 @@ std::vector<std::string> expand_accelerator_list(const std::string& list) {
       continue;
     }
     const Spec spec = Spec::parse(item);
-    const AcceleratorInfo* info = find_info(spec.name);
-    if (!info)
-      throw SpecError(fmt::format("unknown accelerator '{}' (available: {}, or 'all')", spec.name, known_names()));
+    const AcceleratorInfo& info = accelerator_info(spec.name);
     // Construct once so unknown parameters and bad values fail now, before a
     // possibly long scene load.
-    info->make(Params(spec.name, info->params, spec.params));
+    info.make(Params(spec.name, info.params, spec.params));
     out.push_back(spec.to_string());
   }
   if (out.empty()) throw SpecError("no accelerator given");
@@ -102,8 +131,10 @@ std::string describe_accelerators() {
   std::string s;
   for (const auto& info : accelerator_registry()) {
     s += fmt::format("{:<10} {}\n", info.name, info.help);
+    if (info.describe) s += fmt::format("    ({})\n", description_text(info.describe()));
     for (const auto& p : info.params)
       s += fmt::format("    {}={:<10} {}\n", p.name, p.default_value, p.help);
+    for (const auto& st : info.stats) s += fmt::format("    stat {:<18} {}\n", st.key, st.help);
   }
   return s;
 }

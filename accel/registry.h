@@ -4,19 +4,57 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "accel/accelerator.h"
-#include "accel/spec.h"
+#include "base/spec.h"
 
 namespace raylab {
 
+// What a structure can do, so that code above accel/ asks instead of
+// recognising names.
+struct Capabilities {
+  // Spec parameters that select the Moller-Trumbore triangle test (e.g.
+  // "tri=mt" or "tri=mt,layout=bvh2"); empty when the structure has none.
+  std::string mt_variant;
+  // Spec parameters of a robust mode ("robust=1"); empty when none.
+  std::string robust_variant;
+  bool per_ray_counters = true;  // the instrumented kernels count nodes and triangle tests
+  bool quadratic = false;        // cost grows with rays x triangles: benches skip large scenes
+  bool reference = false;        // the reference the others are compared with (its failures do not count)
+};
+
+using Description = std::vector<std::pair<std::string, std::string>>;
+
+// The values of a description joined by spaces ("3.13.5 AVX512").
+std::string description_text(const Description& d);
+
+// A statistic a structure reports in BuildStats::extra.
+struct StatInfo {
+  std::string key;
+  std::string help;
+};
+
+// One registry line: everything the rest of the program knows about a structure.
 struct AcceleratorInfo {
   std::string name;
   std::string help;
   std::vector<ParamInfo> params;
   std::function<std::unique_ptr<Accelerator>(const Params&)> make;
+  Capabilities caps{};
+  // Specs that tests, stress and fuzzing must cover beyond the defaults
+  // (each layout, builder or kernel with its own traversal code).
+  std::vector<std::string> cover{};
+  std::vector<StatInfo> stats{};
+  // Run-time facts as (key, value) pairs, e.g. Embree's {version, isa};
+  // reports record them as <name>_<key>. Empty function = none.
+  std::function<Description()> describe{};
 };
+
+// A name no structure may take: tests use it as "an unknown accelerator"
+// (so adding a structure never breaks them; accelerator_registry() checks).
+inline constexpr const char* kReservedUnknownAccelerator = "no_such_accel";
 
 // Every registered accelerator, in a fixed order (embree first).
 const std::vector<AcceleratorInfo>& accelerator_registry();
@@ -33,6 +71,12 @@ std::vector<std::string> expand_accelerator_list(const std::string& list);
 // Throws SpecError when no spec in the list has the parameter.
 std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, const std::string& param,
                                      const std::vector<std::string>& values);
+
+// The registry line of a name; throws SpecError for unknown names.
+const AcceleratorInfo& accelerator_info(const std::string& name);
+
+// Every registered spec worth covering: each name, then each name's `cover` specs.
+std::vector<std::string> coverage_specs();
 
 // Human-readable list of accelerators and their parameters.
 std::string describe_accelerators();

@@ -8,11 +8,11 @@
 #include <fmt/format.h>
 
 #include "accel/registry.h"
-#include "accel/util/atomic_file.h"
+#include "base/atomic_file.h"
 #include "app/commands.h"
 #include "bench/bench_run.h"
 #include "bench/report.h"
-#include "bench/trace.h"
+#include "tracer/trace.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {

@@ -2,8 +2,10 @@
 #include <cstdio>
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
 #include "accel/registry.h"
-#include "accel/util/timer.h"
+#include "base/timer.h"
 #include "app/commands.h"
 #include "scenes/scene_registry.h"
 
@@ -66,10 +68,42 @@ Runner add_scenes(CLI::App& app) {
   };
 }
 
+// The registry as JSON, for scripts (scripts/*.sh, bench/plot.py): they ask
+// the binary instead of keeping their own lists of structures.
+static nlohmann::json accelerators_json() {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& info : accelerator_registry()) {
+    nlohmann::json j;
+    j["name"] = info.name;
+    j["help"] = info.help;
+    j["description"] = nullptr;
+    if (info.describe) {
+      j["description"] = nlohmann::json::object();
+      for (const auto& [key, value] : info.describe()) j["description"][key] = value;
+    }
+    j["params"] = nlohmann::json::array();
+    for (const auto& p : info.params) j["params"].push_back({{"name", p.name}, {"default", p.default_value}, {"help", p.help}});
+    j["stats"] = nlohmann::json::array();
+    for (const auto& st : info.stats) j["stats"].push_back({{"key", st.key}, {"help", st.help}});
+    j["cover"] = info.cover;
+    const Capabilities& c = info.caps;
+    j["capabilities"] = {{"mt_variant", c.mt_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.mt_variant)},
+                         {"robust_variant", c.robust_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.robust_variant)},
+                         {"per_ray_counters", c.per_ray_counters},
+                         {"quadratic", c.quadratic},
+                         {"reference", c.reference}};
+    out.push_back(j);
+  }
+  return out;
+}
+
 Runner add_accels(CLI::App& app) {
-  app.add_subcommand("accels", "list accelerators and their parameters");
-  return []() {
-    std::printf("%s", describe_accelerators().c_str());
+  auto* cmd = app.add_subcommand("accels", "list accelerators and their parameters");
+  auto json = std::make_shared<bool>(false);
+  cmd->add_flag("--json", *json, "the registry as JSON (capabilities, parameters, statistics, specs to cover)");
+  return [json]() {
+    if (*json) std::printf("%s\n", accelerators_json().dump(2).c_str());
+    else std::printf("%s", describe_accelerators().c_str());
     return 0;
   };
 }

@@ -7,7 +7,7 @@
 #include <tbb/global_control.h>
 
 #include "accel/registry.h"
-#include "accel/util/timer.h"
+#include "base/timer.h"
 #include "app/commands.h"
 #include "bench/report.h"
 #include "scenes/scene_registry.h"

@@ -1,4 +1,4 @@
-// `raylab stress`: every stress scenario against every accelerator (bench/stress.h).
+// `raylab stress`: every stress scenario against every accelerator (checks/stress.h).
 #include <cstdio>
 #include <memory>
 
@@ -8,7 +8,7 @@
 #include "app/check_json.h"
 #include "app/commands.h"
 #include "bench/report.h"
-#include "bench/stress.h"
+#include "checks/stress.h"
 
 namespace raylab::cli {
 

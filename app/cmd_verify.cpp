@@ -7,7 +7,7 @@
 #include "app/check_json.h"
 #include "app/commands.h"
 #include "bench/report.h"
-#include "bench/verify.h"
+#include "checks/verify.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {

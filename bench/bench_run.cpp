@@ -8,9 +8,10 @@
 #include <fmt/format.h>
 
 #include "accel/registry.h"
-#include "accel/util/timer.h"
-#include "bench/ray_sets.h"
-#include "bench/trace.h"
+#include "base/timer.h"
+#include "checks/classify.h"
+#include "tracer/ray_sets.h"
+#include "tracer/trace.h"
 
 namespace raylab {
 
@@ -50,11 +51,9 @@ double agreement(const RaySet& set, const TraceOutput& a, const TraceOutput& e) 
     if (set.occlusion) {
       same += a.occluded[i] == e.occluded[i];
     } else {
-      const Hit& x = a.hits[i];
-      const Hit& y = e.hits[i];
-      same += (!x.valid() && !y.valid()) ||
-              (x.valid() && y.valid() &&
-               (x.prim == y.prim || std::fabs(x.t - y.t) <= 1e-4f * std::max(std::fabs(y.t), 1e-30f)));
+      // Agreement as verify and stress screen it (checks/classify.h): the
+      // same answer, or a tie.
+      same += screen_closest(a.hits[i], e.hits[i]) != Screen::Disagree;
     }
   }
   return static_cast<double>(same) / static_cast<double>(set.rays.size());
@@ -86,8 +85,9 @@ std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& a
                                                const BenchOptions& o) {
   std::vector<std::string> out;
   for (const auto& spec : accel_specs) {
-    const bool brute = spec == "brute" || spec.rfind("brute:", 0) == 0;
-    if (brute && o.brute_max_triangles > 0 && triangles > o.brute_max_triangles) continue;
+    // Structures whose cost grows with rays x triangles skip large scenes.
+    const bool quadratic = accelerator_info(Spec::parse(spec).name).caps.quadratic;
+    if (quadratic && o.brute_max_triangles > 0 && triangles > o.brute_max_triangles) continue;
     out.push_back(spec);
   }
   return out;

@@ -33,6 +33,24 @@ import numpy as np  # noqa: E402
 
 # ---------------------------------------------------------------- input
 
+def registry(binary):
+    """The accelerators as `raylab accels --json` lists them (name, params, capabilities), or None."""
+    import subprocess
+    try:
+        out = subprocess.run([binary, "accels", "--json"], capture_output=True, text=True, check=True, timeout=60)
+        return json.loads(out.stdout)
+    except (OSError, subprocess.SubprocessError, ValueError):
+        return None
+
+
+def with_param(reg, param, recs):
+    """Names of the accelerators that declare `param` (asked of the binary; without one, the
+    structures whose records carry the parameter in their spec)."""
+    if reg is not None:
+        return {a["name"] for a in reg if any(p["name"] == param for p in a["params"])}
+    return {parse_spec(r["accel"])[0] for r in recs if param in parse_spec(r["accel"])[1]}
+
+
 def load(path):
     with open(path) as f:
         return json.load(f)
@@ -263,8 +281,7 @@ def chart_scaling(recs, out, written, header):
         n = [r["triangles"] for r in rs]
         axes[0].plot(n, [1e3 / r["mrays_per_s"] if r["mrays_per_s"] > 0 else float("nan") for r in rs], marker="o",
                      ms=3, label=acc)
-        if acc != "embree" or True:
-            axes[1].plot(n, [max(r["build_ms"], 1e-3) for r in rs], marker="o", ms=3, label=acc)
+        axes[1].plot(n, [max(r["build_ms"], 1e-3) for r in rs], marker="o", ms=3, label=acc)
     n = np.array(all_n, dtype=float)
     if len(n) >= 2:
         # Guides anchored at the geometric mean of the first points.
@@ -407,6 +424,8 @@ def main():
     ap.add_argument("--scaling")
     ap.add_argument("--render", action="append", default=[])
     ap.add_argument("--out")
+    ap.add_argument("--raylab", default=os.environ.get("RAYLAB", "build/raylab"),
+                    help="the binary asked for the accelerator registry (raylab accels --json)")
     ap.add_argument("--table")
     a = ap.parse_args()
     if a.dir:
@@ -441,7 +460,8 @@ def main():
         skipped += ["speed_vs_accuracy", "build_vs_trace"]
     sweep = [r for f in a.sweep for r in records(f)]
     sweep_header = load(a.sweep[0]) if a.sweep else {}
-    if not sweep_chart(sweep, {"grid", "hashgrid", "grid2"}, "density", out, "density_sweep",
+    reg = registry(a.raylab)
+    if not sweep_chart(sweep, with_param(reg, "density", sweep), "density", out, "density_sweep",
                        "Grid density sweep", "density (cells per triangle; 1 = the n^(1/3) rule)", written,
                        sweep_header, mark=(1.0, "n^(1/3) rule"),
                        second=(lambda r: r["bytes_per_triangle"], "bytes per triangle")):
@@ -452,12 +472,17 @@ def main():
             return None
         return float(p.get("ct", 15)) / float(p.get("ci", 20))
 
-    if not sweep_chart(sweep, {"kdtree"}, None, out, "kdtree_cost_sweep", "k-d tree cost constants",
+    # The k-d tree's SAH constants: the structures declaring empty_bonus (ct/ci mean other things elsewhere).
+    if not sweep_chart(sweep, with_param(reg, "empty_bonus", sweep), None, out, "kdtree_cost_sweep", "k-d tree cost constants",
                        "traversal / intersection cost ratio ct/ci (default 15/20)", written, sweep_header,
                        mark=(0.75, "default"), xfun=kd_ratio,
                        second=(lambda r: max(r["nodes_per_ray"], 1e-3), "nodes visited per ray")):
         skipped.append("kdtree_cost_sweep")
-    if not sweep_chart(sweep, {"bvh"}, "leaf", out, "bvh_leaf_sweep", "BVH leaf size", "max triangles per leaf",
+    # Leaf size of the BVH family: the structures declaring both leaf and layout.
+    bvh_like = with_param(reg, "leaf", sweep)
+    if reg is not None:
+        bvh_like &= with_param(reg, "layout", sweep)
+    if not sweep_chart(sweep, bvh_like, "leaf", out, "bvh_leaf_sweep", "BVH leaf size", "max triangles per leaf",
                        written, sweep_header,
                        second=(lambda r: max(r["tris_per_ray"], 1e-3), "triangle tests per ray")):
         skipped.append("bvh_leaf_sweep")

@@ -5,9 +5,9 @@
 #include <ctime>
 #include <fstream>
 
-#include "accel/embree/embree_accel.h"
-#include "accel/util/atomic_file.h"
-#include "bench/trace.h"
+#include "accel/registry.h"
+#include "base/atomic_file.h"
+#include "tracer/trace.h"
 
 #ifndef RAYLAB_SOURCE_DIR
 #define RAYLAB_SOURCE_DIR "."
@@ -51,11 +51,13 @@ nlohmann::json report_header(const std::string& command) {
   h["date"] = date;
   h["cpu"] = cpu_model();
   h["hardware_threads"] = hardware_threads();
-  h["embree"] = embree_version_string();
-  {
-    const std::string e = h["embree"].get<std::string>();
-    const auto sp = e.rfind(' ');
-    h["embree_isa"] = sp == std::string::npos ? std::string("unknown") : e.substr(sp + 1);
+  // Each structure's run-time facts from the registry: "embree" (version
+  // and ISA joined) and "embree_version", "embree_isa"; "bvh", "bvh_isa".
+  for (const auto& info : accelerator_registry()) {
+    if (!info.describe) continue;
+    const Description d = info.describe();
+    h[info.name] = description_text(d);
+    for (const auto& [key, value] : d) h[info.name + "_" + key] = value;
   }
   h["compiler"] = std::string("g++ ") + __VERSION__;
   h["flags"] = RAYLAB_CXX_FLAGS;

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/spec.h"
+#include "base/spec.h"
 #include "scenes/scene.h"
 
 namespace raylab {

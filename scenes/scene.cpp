@@ -35,6 +35,16 @@ std::string view_problem(const View& v) {
   return "";
 }
 
+Scene scene_from_mesh(std::string name, TriangleMesh mesh) {
+  Scene s;
+  s.name = std::move(name);
+  s.mesh = std::move(mesh);
+  s.materials = {Material{}};
+  s.material_ids.assign(s.mesh.num_triangles(), 0);
+  if (s.mesh.num_triangles() > 0) s.view = frame_bounds(s.mesh.bounds());
+  return s;
+}
+
 View frame_bounds(const Aabb& box, int width, int height, float fov_deg) {
   View v;
   v.width = width;

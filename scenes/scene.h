@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/aabb.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/aabb.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 
@@ -55,5 +55,9 @@ std::string view_problem(const View& v);
 // A camera looking at the box from a fixed oblique direction (y up), far
 // enough that the bounding sphere fits the vertical field of view.
 View frame_bounds(const Aabb& box, int width = 512, int height = 512, float fov_deg = 45.0f);
+
+// A bare mesh as a scene: one default material, framed by its bounds (when
+// not empty). For tests and stress scenarios.
+Scene scene_from_mesh(std::string name, TriangleMesh mesh);
 
 }  // namespace raylab

@@ -3,7 +3,7 @@
 // a path to a mesh file, or a path to a JSON scene file (scenes/scene_file.h).
 #include <string>
 
-#include "accel/spec.h"
+#include "base/spec.h"
 #include "scenes/scene.h"
 
 namespace raylab {

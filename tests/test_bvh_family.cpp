@@ -24,7 +24,7 @@
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/registry.h"
-#include "bench/ray_sets.h"
+#include "tracer/ray_sets.h"
 #include "scenes/procedural.h"
 #include "tests/test_util.h"
 
@@ -112,7 +112,7 @@ std::vector<std::string> family_specs() {
   for (const char* extra :
        {"bvh:opt=reinsert,layout=bvh2", "bvh:opt=reinsert,layout=bvh8", "bvh:opt=reinsert,builder=sbvh,layout=bvh4",
         "bvh:block=4,leaf=4,bleaf=1", "bvh:block=8,leaf=8", "bvh:block=16,leaf=48", "bvh:layout=bvh4,block=16",
-        "bvh:builder=sbvh,alpha=0,budget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8", "bvh:layout=bvh2,leaf=1",
+        "bvh:builder=sbvh,alpha=0,sbudget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8", "bvh:layout=bvh2,leaf=1",
         "bvh:ct=4,ci=0.5", "bvh:bins=4"})
     specs.push_back(extra);
   return specs;
@@ -249,8 +249,8 @@ TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
 
 TEST(BvhFamily, RejectsBadParameters) {
   for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt",
-                           "bvh:bins=1", "bvh:alpha=-1", "bvh:budget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
-                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_ms=-1", "bvh:smin=-2", "bvh:nodes=3"})
+                           "bvh:bins=1", "bvh:alpha=-1", "bvh:sbudget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
+                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
@@ -572,9 +572,9 @@ TEST(BvhReinsertion, LowersSahCostAndRespectsTheTimeBudget) {
   EXPECT_NEAR(st.sah_after, tree_sah_cost(opt.nodes), 1e-3 * st.sah_after);
   EXPECT_LT(st.sah_after, 0.98 * st.sah_before);
   EXPECT_GT(st.moves, 0u);
-  // No time, no change.
+  // No rounds, no change.
   ReinsertionOptions none;
-  none.time_budget_ms = 0.0;
+  none.max_rounds = 0;
   ReinsertionStats st0;
   const BinaryBvh same = optimize_reinsertion(base, none, &st0);
   EXPECT_EQ(st0.rounds, 0);
@@ -666,16 +666,7 @@ size_t sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, s
   Pcg32 rng(42, 3);
   std::vector<Ray> batch;
   for (size_t i = 0; i < rays; ++i) {
-    const size_t tri = rng.next() % full.num_triangles();
-    const int corner = static_cast<int>(rng.next() % 3);
-    const Vec3f& p = full.vertex(tri, corner);
-    const Vec3f& q = full.vertex(tri, (corner + 1) % 3);
-    const Vec3f target = (i % 2) ? p : Vec3f(p + rng.uniform() * (q - p));
-    const Vec3f radial = (target - center).normalized();
-    Vec3f w = test::random_direction(rng);
-    while (w.dot(radial) < 0.5f) w = test::random_direction(rng);
-    const Vec3f org = target + 2.0f * w;
-    batch.emplace_back(org, (target - org).normalized());
+    batch.push_back(test::ray_at_shared_edge(full, center, i, rng));
     batch.emplace_back(center, test::random_direction(rng));
   }
   std::vector<Hit> hits(batch.size());
@@ -689,7 +680,7 @@ size_t sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, s
 
 TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
   for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
-                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,budget=1"}) {
+                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1"}) {
     EXPECT_EQ(sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the radius.
     EXPECT_EQ(sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accel/registry.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -21,7 +22,8 @@ TEST(Cli, BadArgumentsExitWithCode2AndAMessage) {
   };
   const std::vector<Case> cases = {
       {"render --scene nosuch --out X", "unknown scene 'nosuch'"},
-      {"render --accel octree --out X", "unknown accelerator 'octree'"},
+      {std::string("render --accel ") + kReservedUnknownAccelerator + " --out X",
+       std::string("unknown accelerator '") + kReservedUnknownAccelerator + "'"},
       {"render --accel bvh:leaf=zero --out X", "not an integer"},
       {"render --frobnicate --out X", "frobnicate"},
       {"render --size 12xq --out X", "invalid size"},
@@ -138,6 +140,23 @@ TEST(Cli, InfoAndListings) {
   EXPECT_THAT(accels.output, HasSubstr("embree"));
   EXPECT_THAT(accels.output, HasSubstr("leaf="));
   EXPECT_EQ(test::run_raylab("--help").exit_code, 0);
+}
+
+TEST(Cli, AccelsJsonIsTheRegistry) {
+  const auto r = test::run_raylab("accels --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  ASSERT_EQ(j.size(), accelerator_registry().size());
+  for (size_t i = 0; i < j.size(); ++i) {
+    const AcceleratorInfo& info = accelerator_registry()[i];
+    EXPECT_EQ(j[i]["name"], info.name);
+    EXPECT_EQ(j[i]["params"].size(), info.params.size()) << info.name;
+    EXPECT_EQ(j[i]["stats"].size(), info.stats.size()) << info.name;
+    EXPECT_EQ(j[i]["cover"].size(), info.cover.size()) << info.name;
+    EXPECT_EQ(j[i]["capabilities"]["reference"].get<bool>(), info.caps.reference) << info.name;
+    EXPECT_EQ(j[i]["capabilities"]["quadratic"].get<bool>(), info.caps.quadratic) << info.name;
+    EXPECT_EQ(j[i]["description"].is_null(), !info.describe) << info.name;
+  }
 }
 
 TEST(Cli, OutputInUnwritablePlaceFailsCleanly) {

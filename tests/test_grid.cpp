@@ -18,7 +18,7 @@
 #include "accel/grid/two_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 #include "accel/registry.h"
-#include "bench/verify.h"
+#include "checks/verify.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_registry.h"
 #include "tests/test_util.h"
@@ -31,12 +31,8 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // ---------------------------------------------------------------------------
 // Scenes built here
 
-Scene scene_from_mesh(std::string name, TriangleMesh mesh) {
-  Scene s;
-  s.name = std::move(name);
-  s.mesh = std::move(mesh);
-  s.materials = {Material{}};
-  s.material_ids.assign(s.mesh.num_triangles(), 0);
+Scene lit_scene_from_mesh(std::string name, TriangleMesh mesh) {
+  Scene s = scene_from_mesh(std::move(name), std::move(mesh));
   s.view = frame_bounds(s.mesh.bounds());
   s.background = Vec3f::Constant(1.0f);
   return s;
@@ -716,7 +712,7 @@ TEST(GridStats, BuildAndTraversalFiguresAreConsistent) {
   for (const auto& spec : {"grid", "hashgrid", "grid2"}) {
     auto a = make_accelerator(spec);
     const BuildStats st = a->build(s.mesh);
-    EXPECT_GT(st.bytes, s.mesh.num_triangles() * sizeof(GridTriangle)) << spec;
+    EXPECT_GT(st.bytes, s.mesh.num_triangles() * sizeof(LeafTriangle)) << spec;
     EXPECT_GT(st.nodes, 0u);
     EXPECT_GT(st.leaves, 0u);
     EXPECT_LE(st.leaves, st.nodes);
@@ -760,7 +756,7 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
   auto figures = [&](const std::string& spec) {
     auto a = make_accelerator(spec);
     const BuildStats st = a->build(m);
-    return Figures{static_cast<double>(st.bytes - m.num_triangles() * sizeof(GridTriangle)), st.extra.at("cells"),
+    return Figures{static_cast<double>(st.bytes - m.num_triangles() * sizeof(LeafTriangle)), st.extra.at("cells"),
                    st.extra.at("nonempty_cells"), st.extra.at("refs")};
   };
   std::vector<Figures> dense, hashed;
@@ -797,7 +793,7 @@ TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
     EXPECT_NE(err.find("budget"), std::string::npos) << spec;
     EXPECT_EQ(st.extra.at("budget_capped"), 1.0) << spec;
     const double budget = std::string(spec).find("budget=1") != std::string::npos ? 1.0 : 0.5;
-    EXPECT_LE(static_cast<double>(st.bytes - s.mesh.num_triangles() * sizeof(GridTriangle)),
+    EXPECT_LE(static_cast<double>(st.bytes - s.mesh.num_triangles() * sizeof(LeafTriangle)),
               budget * 1024 * 1024 * 1.05)
         << spec;
     if (std::string(spec).find("res=") == std::string::npos) {
@@ -855,8 +851,8 @@ void expect_verified(const Scene& scene, size_t rays) {
 TEST(GridVerify, ProceduralScenesAgreeWithEmbree) {
   expect_verified(load_scene("cornell"), 20000);
   expect_verified(load_scene("soup:n=20000,seed=4"), 20000);
-  expect_verified(scene_from_mesh("flat", make_flat_scene(40, 1000, 2)), 20000);
-  expect_verified(scene_from_mesh("stadium", make_stadium_scene()), 20000);
+  expect_verified(lit_scene_from_mesh("flat", make_flat_scene(40, 1000, 2)), 20000);
+  expect_verified(lit_scene_from_mesh("stadium", make_stadium_scene()), 20000);
 }
 
 TEST(GridVerify, SharedMeshesAgreeWithEmbree) {

@@ -15,7 +15,7 @@
 #include "accel/kdtree/build_spatial_median.h"
 #include "accel/kdtree/clip_triangle.h"
 #include "accel/registry.h"
-#include "bench/verify.h"
+#include "checks/verify.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_registry.h"
 #include "tests/test_util.h"

@@ -35,6 +35,22 @@ std::vector<std::vector<std::string>> read_tsv(const std::string& path) {
 
 Vec3f vec3(const nlohmann::json& j) { return Vec3f(j[0].get<float>(), j[1].get<float>(), j[2].get<float>()); }
 
+// Primary rays through a 16x16 image of the scene's view (built with the
+// default BVH) that hit something.
+long hits_in_view(const Scene& s) {
+  auto accel = make_accelerator("bvh");
+  accel->build(s.mesh);
+  View v = s.view;
+  v.width = v.height = 16;
+  const PinholeCamera cam(v);
+  std::vector<Ray> rays;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
+  std::vector<Hit> hits(rays.size());
+  accel->intersect(rays, hits);
+  return std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); });
+}
+
 TEST(SharedScenes, SpdScenesLoadWithTheirOwnViewpoints) {
   if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
   const std::string spd = test::shared_dir() + "/scenes/spd/";
@@ -55,17 +71,7 @@ TEST(SharedScenes, SpdScenesLoadWithTheirOwnViewpoints) {
       ++checked;
       continue;
     }
-    auto accel = make_accelerator("bvh");
-    accel->build(s.mesh);
-    View v = s.view;
-    v.width = v.height = 16;
-    const PinholeCamera cam(v);
-    std::vector<Ray> rays;
-    for (int y = 0; y < 16; ++y)
-      for (int x = 0; x < 16; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
-    std::vector<Hit> hits(rays.size());
-    accel->intersect(rays, hits);
-    EXPECT_GT(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); }), 10) << "the view misses the scene";
+    EXPECT_GT(hits_in_view(s), 10) << "the view misses the scene";
     ++checked;
   }
   EXPECT_GE(checked, 10);
@@ -82,17 +88,7 @@ TEST(SharedScenes, SceneFilesForSharedMeshesLoadAndSeeTheirMeshes) {
     EXPECT_EQ(view_problem(s.view), "");
     EXPECT_TRUE(s.has_emitters() || s.background.maxCoeff() > 0.0f);
     if (s.num_triangles() < 100000) {  // the viewpoint check builds a BVH: small ones only
-      auto accel = make_accelerator("bvh");
-      accel->build(s.mesh);
-      View v = s.view;
-      v.width = v.height = 16;
-      const PinholeCamera cam(v);
-      std::vector<Ray> rays;
-      for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
-      std::vector<Hit> hits(rays.size());
-      accel->intersect(rays, hits);
-      EXPECT_GT(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); }), 128);
+      EXPECT_GT(hits_in_view(s), 128);
     }
     ++checked;
   }

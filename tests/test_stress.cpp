@@ -11,8 +11,8 @@
 
 #include "accel/core/slab_test.h"
 #include "accel/registry.h"
-#include "bench/oracle.h"
-#include "bench/stress.h"
+#include "checks/oracle.h"
+#include "checks/stress.h"
 #include "scenes/procedural.h"
 #include "test_util.h"
 

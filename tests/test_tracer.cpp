@@ -8,6 +8,8 @@
 #include "tracer/camera.h"
 #include "tracer/integrator.h"
 #include "tracer/lights.h"
+#include "tracer/spawn.h"
+#include "tests/test_util.h"
 
 namespace raylab {
 namespace {
@@ -36,15 +38,19 @@ TEST(PathTracer, SameSeedGivesSameBytesWithOneAndTwoThreads) {
   EXPECT_EQ(a.rgb, render_with_threads(s, "brute", 2, 7).rgb);
 }
 
-TEST(PathTracer, CornellBoxHasRedLeftGreenRightAndLitCeilingLight) {
-  const Scene s = make_cornell_box();
+// The image of a scene rendered with the default BVH.
+Image render_square(const Scene& s, int size, int spp, int max_depth = RenderSettings{}.max_depth) {
   auto accel = make_accelerator("bvh");
   accel->build(s.mesh);
   RenderSettings rs;
-  rs.width = 64;
-  rs.height = 64;
-  rs.spp = 16;
-  const Image img = render(s, *accel, rs).image;
+  rs.width = rs.height = size;
+  rs.spp = spp;
+  rs.max_depth = max_depth;
+  return render(s, *accel, rs).image;
+}
+
+TEST(PathTracer, CornellBoxHasRedLeftGreenRightAndLitCeilingLight) {
+  const Image img = render_square(make_cornell_box(), 64, 16);
   auto region_mean = [&](int x0, int x1, int y0, int y1) {
     Vec3f sum = Vec3f::Zero();
     for (int y = y0; y < y1; ++y)
@@ -73,14 +79,7 @@ TEST(PathTracer, WhiteFurnaceConvergesToAnalyticValue) {
   s.view.from = Vec3f(0.1f, 0.2f, 0.05f);
   s.view.at = Vec3f(1, 0.3f, 0.4f);
   s.view.fov_deg = 70;
-  auto accel = make_accelerator("bvh");
-  accel->build(s.mesh);
-  RenderSettings rs;
-  rs.width = 24;
-  rs.height = 24;
-  rs.spp = 128;
-  rs.max_depth = 1000;
-  const Image img = render(s, *accel, rs).image;
+  const Image img = render_square(s, 24, 128, 1000);
   const Vec3f expected = emission.cwiseQuotient(Vec3f::Ones() - albedo);  // (1.0, 1.0, 1.0)
   const Vec3f mean = img.mean();
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean[c], expected[c], 0.02f * expected[c]) << "channel " << c;
@@ -111,6 +110,55 @@ TEST(Lights, SamplingMatchesPowerAndDensity) {
   EXPECT_NEAR(smp.normal.y(), -1.0f, 1e-6f);
   EXPECT_NEAR(smp.point.y(), 548.7f, 1e-3f);
   EXPECT_EQ(lights.pdf_area(0), 0.0f);  // the floor is not a light
+}
+
+// The spawn-offset rule (tracer/spawn.h), as pbrt-v4's "reintersect" test:
+// random triangles of many sizes far from and near the origin, a ray to a
+// random point of each, then rays spawned from the hit into the hemisphere
+// of the side it arrived on (and shadow rays to points on that side) must
+// never hit the same triangle again.
+TEST(SpawnOffset, RaySpawnedFromAHitNeverHitsTheSameTriangleAgain) {
+  Pcg32 rng(12345, 7);
+  size_t spawned = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const float scale = std::ldexp(1.0f, static_cast<int>(rng.next() % 24) - 12);     // 2^-12 .. 2^11
+    const float offset = std::ldexp(1.0f, static_cast<int>(rng.next() % 28) - 10);    // 2^-10 .. 2^17
+    const Vec3f center = offset * test::random_direction(rng);
+    TriangleMesh mesh;
+    for (int c = 0; c < 3; ++c) mesh.vertices.push_back(center + scale * test::random_direction(rng));
+    mesh.triangles = {{0, 1, 2}};
+    const Vec3f e1 = mesh.vertices[1] - mesh.vertices[0], e2 = mesh.vertices[2] - mesh.vertices[0];
+    if (!(e1.cross(e2).norm() > 1e-3f * scale * scale)) continue;  // nearly degenerate: no defined normal
+    auto accel = make_accelerator("brute");
+    accel->build(mesh);
+    Aabb bounds;
+    for (const Vec3f& v : mesh.vertices) bounds.extend(v);
+    const SpawnOffset spawn(bounds);
+
+    // A ray from a random point at some distance to a random point of the triangle.
+    float b1 = rng.uniform(), b2 = rng.uniform();
+    if (b1 + b2 > 1.0f) b1 = 1.0f - b1, b2 = 1.0f - b2;
+    const Vec3f target = (1.0f - b1 - b2) * mesh.vertices[0] + b1 * mesh.vertices[1] + b2 * mesh.vertices[2];
+    const Vec3f from = target + (scale * (1.0f + 10.0f * rng.uniform())) * test::random_direction(rng);
+    const Hit hit = accel->intersect1(Ray(from, target - from));
+    if (!hit.valid()) continue;  // grazing the edge: nothing to spawn from
+
+    // As the tracer: the hit point from the barycentrics, the geometric normal facing the ray.
+    const Vec3f p = (1.0f - hit.u - hit.v) * mesh.vertices[0] + hit.u * mesh.vertices[1] + hit.v * mesh.vertices[2];
+    Vec3f n = e1.cross(e2).normalized();
+    if (n.dot(target - from) > 0.0f) n = -n;
+    const Vec3f origin = spawn.origin(p, n, from);
+    for (int k = 0; k < 16; ++k) {
+      Vec3f d = test::random_direction(rng);
+      if (d.dot(n) < 0.0f) d = -d;
+      ASSERT_FALSE(accel->intersect1(Ray(origin, d)).valid())
+          << "trial " << trial << " scale " << scale << " offset " << offset << " direction " << k;
+      ASSERT_FALSE(accel->occluded1(shadow_ray_to(origin, origin + (scale * 4.0f) * d)))
+          << "trial " << trial << " shadow ray " << k;
+      ++spawned;
+    }
+  }
+  EXPECT_GT(spawned, 16000u);  // most trials spawn rays
 }
 
 }  // namespace

@@ -85,19 +85,8 @@ size_t count_sphere_leaks(const std::string& spec, size_t rays_per_kind, const V
   Pcg32 rng(42, 3);
   size_t leaks = 0;
   for (size_t i = 0; i < rays_per_kind; ++i) {
-    // Targets on the complete sphere, alternating vertices and edge points.
-    const size_t tri = rng.next() % full.num_triangles();
-    const int corner = static_cast<int>(rng.next() % 3);
-    const Vec3f& p = full.vertex(tri, corner);
-    const Vec3f& q = full.vertex(tri, (corner + 1) % 3);
-    const Vec3f target = (i % 2) ? p : Vec3f(p + rng.uniform() * (q - p));
-    // Come from outside within 60 degrees of the outward radial direction:
-    // steeper than any face's tilt, so the ray truly crosses the surface.
-    const Vec3f radial = (target - center).normalized();
-    Vec3f w = test::random_direction(rng);
-    while (w.dot(radial) < 0.5f) w = test::random_direction(rng);
-    const Vec3f org = target + 2.0f * w;
-    if (!accel->intersect1(Ray(org, (target - org).normalized())).valid()) ++leaks;
+    // Targets on the complete sphere, alternating edge points and vertices.
+    if (!accel->intersect1(test::ray_at_shared_edge(full, center, i, rng)).valid()) ++leaks;
     if (!accel->intersect1(Ray(center, test::random_direction(rng))).valid()) ++leaks;
   }
   return leaks;

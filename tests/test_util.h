@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <string>
 
-#include "accel/core/ray.h"
-#include "accel/core/triangle_mesh.h"
-#include "tracer/pcg.h"
+#include "base/ray.h"
+#include "base/triangle_mesh.h"
+#include "base/pcg.h"
 
 namespace raylab::test {
 
@@ -36,6 +36,23 @@ inline Vec3f random_direction(Pcg32& rng) {
     const float n2 = v.squaredNorm();
     if (n2 > 1e-4f && n2 <= 1.0f) return v / std::sqrt(n2);
   }
+}
+
+// A ray from outside a closed mesh around `center`, aimed at a point of one
+// of `full`'s edges (even i) or at one of its vertices (odd i), coming
+// within 60 degrees of the outward radial direction: steeper than any
+// face's tilt, so the ray truly crosses the surface there.
+inline Ray ray_at_shared_edge(const TriangleMesh& full, const Vec3f& center, size_t i, Pcg32& rng) {
+  const size_t tri = rng.next() % full.num_triangles();
+  const int corner = static_cast<int>(rng.next() % 3);
+  const Vec3f& p = full.vertex(tri, corner);
+  const Vec3f& q = full.vertex(tri, (corner + 1) % 3);
+  const Vec3f target = (i % 2) ? p : Vec3f(p + rng.uniform() * (q - p));
+  const Vec3f radial = (target - center).normalized();
+  Vec3f w = random_direction(rng);
+  while (w.dot(radial) < 0.5f) w = random_direction(rng);
+  const Vec3f org = target + 2.0f * w;
+  return Ray(org, (target - org).normalized());
 }
 
 }  // namespace raylab::test

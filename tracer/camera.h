@@ -2,7 +2,7 @@
 // Pinhole camera from a scene View.
 #include <cmath>
 
-#include "accel/core/ray.h"
+#include "base/ray.h"
 #include "scenes/scene.h"
 
 namespace raylab {

@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-#include "accel/util/atomic_file.h"
+#include "base/atomic_file.h"
 
 namespace raylab {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/vec.h"
+#include "base/vec.h"
 
 namespace raylab {
 

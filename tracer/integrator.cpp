@@ -8,11 +8,12 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "accel/util/timer.h"
+#include "base/timer.h"
 #include "tracer/camera.h"
 #include "tracer/lights.h"
-#include "tracer/pcg.h"
+#include "base/pcg.h"
 #include "tracer/sampling.h"
+#include "tracer/spawn.h"
 
 namespace raylab {
 
@@ -38,10 +39,7 @@ class TileRenderer {
  public:
   TileRenderer(const Scene& scene, const Accelerator& accel, const LightSampler& lights, const PinholeCamera& cam,
                const RenderSettings& s)
-      : scene_(scene), accel_(accel), lights_(lights), cam_(cam), s_(s) {
-    const Aabb b = scene.bounds();
-    scene_eps_ = b.is_empty() ? 1e-6f : 1e-6f * b.diagonal().norm();
-  }
+      : scene_(scene), accel_(accel), lights_(lights), cam_(cam), s_(s), spawn_(scene.bounds()) {}
 
   // Renders pixels [x0,x1) x [y0,y1) into img.
   void render_tile(int x0, int x1, int y0, int y1, Image& img, uint64_t& rays, uint64_t& shadow_rays) const {
@@ -78,14 +76,46 @@ class TileRenderer {
   }
 
  private:
+  // Next-event estimation's shadow rays of one bounce, traced as one batch.
+  struct ShadowBatch {
+    std::vector<Ray> rays;
+    std::vector<Vec3f> contrib;    // added to the path's radiance when the ray is not occluded
+    std::vector<uint32_t> path;
+    void clear() {
+      rays.clear();
+      contrib.clear();
+      path.clear();
+    }
+  };
+
+  // Samples a point on a light for the path at `origin` (normal n, BRDF f)
+  // and queues its shadow ray, weighted by the power heuristic.
+  void sample_light(Path& path, uint32_t path_id, const Vec3f& origin, const Vec3f& n, const Vec3f& f,
+                    ShadowBatch& shadow) const {
+    const float u0 = path.rng.uniform(), u1 = path.rng.uniform(), u2 = path.rng.uniform();
+    const LightSampler::Sample ls = lights_.sample(u0, u1, u2);
+    const Vec3f to_light = ls.point - origin;
+    const float dist2 = to_light.squaredNorm();
+    if (!(dist2 > 0.0f)) return;
+    const float dist = std::sqrt(dist2);
+    const Vec3f wi = to_light / dist;
+    const float cos_s = n.dot(wi);
+    const float cos_l = -ls.normal.dot(wi);
+    if (!(cos_s > 0.0f && cos_l > 0.0f && ls.pdf_area > 0.0f)) return;
+    const float light_pdf = ls.pdf_area * dist2 / cos_l;
+    const float bsdf_pdf = cos_s * kInvPi;
+    const float w = power_heuristic(light_pdf, bsdf_pdf);
+    shadow.rays.push_back(shadow_ray_to(origin, ls.point));
+    shadow.contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(ls.emission) * (cos_s * w / light_pdf));
+    shadow.path.push_back(path_id);
+  }
+
   void trace_paths(std::vector<Path>& paths, std::vector<Ray>& rays, uint64_t& ray_count,
                    uint64_t& shadow_count) const {
     std::vector<uint32_t> active(paths.size());
     for (uint32_t i = 0; i < active.size(); ++i) active[i] = i;
     std::vector<Hit> hits;
-    std::vector<Ray> shadow;
-    std::vector<Vec3f> shadow_contrib;
-    std::vector<uint32_t> shadow_path;
+    ShadowBatch shadow;
     std::vector<uint8_t> occluded;
     std::vector<Ray> next_rays;
     std::vector<uint32_t> next_active;
@@ -95,8 +125,6 @@ class TileRenderer {
       accel_.intersect(rays, hits);
       ray_count += rays.size();
       shadow.clear();
-      shadow_contrib.clear();
-      shadow_path.clear();
       next_rays.clear();
       next_active.clear();
 
@@ -132,31 +160,10 @@ class TileRenderer {
 
         const Vec3f n = front ? ng : Vec3f(-ng);
         const Vec3f p = (1.0f - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
-        const float eps = 2e-5f * (p.cwiseAbs().maxCoeff() + ray.org.cwiseAbs().maxCoeff()) + scene_eps_;
-        const Vec3f origin = p + eps * n;
+        const Vec3f origin = spawn_.origin(p, n, ray.org);
         const Vec3f f = mat.albedo * kInvPi;  // Lambertian BRDF
 
-        // Next-event estimation.
-        if (!lights_.empty()) {
-          const float u0 = path.rng.uniform(), u1 = path.rng.uniform(), u2 = path.rng.uniform();
-          const LightSampler::Sample ls = lights_.sample(u0, u1, u2);
-          const Vec3f to_light = ls.point - origin;
-          const float dist2 = to_light.squaredNorm();
-          if (dist2 > 0.0f) {
-            const float dist = std::sqrt(dist2);
-            const Vec3f wi = to_light / dist;
-            const float cos_s = n.dot(wi);
-            const float cos_l = -ls.normal.dot(wi);
-            if (cos_s > 0.0f && cos_l > 0.0f && ls.pdf_area > 0.0f) {
-              const float light_pdf = ls.pdf_area * dist2 / cos_l;
-              const float bsdf_pdf = cos_s * kInvPi;
-              const float w = power_heuristic(light_pdf, bsdf_pdf);
-              shadow.emplace_back(origin, to_light, 0.0f, 1.0f - 1e-4f);
-              shadow_contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(ls.emission) * (cos_s * w / light_pdf));
-              shadow_path.push_back(active[k]);
-            }
-          }
-        }
+        if (!lights_.empty()) sample_light(path, active[k], origin, n, f, shadow);
 
         // Continue the path by cosine-weighted sampling.
         const float b1 = path.rng.uniform(), b2 = path.rng.uniform();
@@ -174,12 +181,12 @@ class TileRenderer {
         next_active.push_back(active[k]);
       }
 
-      if (!shadow.empty()) {
-        occluded.resize(shadow.size());
-        accel_.occluded(shadow, occluded);
-        shadow_count += shadow.size();
-        for (size_t j = 0; j < shadow.size(); ++j)
-          if (!occluded[j]) paths[shadow_path[j]].radiance += shadow_contrib[j];
+      if (!shadow.rays.empty()) {
+        occluded.resize(shadow.rays.size());
+        accel_.occluded(shadow.rays, occluded);
+        shadow_count += shadow.rays.size();
+        for (size_t j = 0; j < shadow.rays.size(); ++j)
+          if (!occluded[j]) paths[shadow.path[j]].radiance += shadow.contrib[j];
       }
       rays.swap(next_rays);
       active.swap(next_active);
@@ -191,7 +198,7 @@ class TileRenderer {
   const LightSampler& lights_;
   const PinholeCamera& cam_;
   const RenderSettings& s_;
-  float scene_eps_;
+  SpawnOffset spawn_;
 };
 
 }  // namespace

@@ -2,7 +2,7 @@
 // Sampling routines for the path tracer.
 #include <cmath>
 
-#include "accel/core/vec.h"
+#include "base/vec.h"
 
 namespace raylab {
 

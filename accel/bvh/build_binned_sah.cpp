@@ -41,13 +41,7 @@ class BinnedBuilder {
 
   BinaryBvh run() {
     const size_t n = refs_.size();
-    out_.prim_ids.resize(n);
-    if (n == 0) {
-      out_.nodes.resize(1);
-      set_leaf(out_.nodes[0], Aabb::empty(), 0, 0);
-      return std::move(out_);
-    }
-    out_.nodes.resize(2 * n);
+    if (!start_binary_bvh(out_, n)) return std::move(out_);
     scratch_.resize(n);
     Box4 bounds, cbounds;
     compute_bounds(refs_.data(), 0, n, bounds, cbounds);

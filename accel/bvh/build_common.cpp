@@ -67,7 +67,7 @@ TreeShape measure_tree(std::span<const Bvh2Node> nodes) {
     int depth;
   };
   std::vector<Item> stack{{0, 0}};
-  double depth_sum = 0.0, cost = 0.0;
+  SahTally tally;
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
@@ -77,16 +77,15 @@ TreeShape measure_tree(std::span<const Bvh2Node> nodes) {
     const double area = n.bounds().half_area();
     if (n.is_leaf() || n.index == 0) {
       s.leaves++;
-      depth_sum += it.depth;
-      cost += kSahIntersectionCost * area * n.count;
+      tally.leaf(area, n.count, it.depth);
     } else {
-      cost += kSahTraversalCost * area;
+      tally.inner(area);
       stack.push_back({n.index, it.depth + 1});
       stack.push_back({n.index + 1, it.depth + 1});
     }
   }
-  s.avg_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
-  s.sah_cost = root_area > 0.0 ? cost / root_area : 0.0;
+  s.avg_leaf_depth = tally.avg_leaf_depth();
+  s.sah_cost = tally.sah_cost(root_area);
   return s;
 }
 
@@ -98,7 +97,7 @@ double tree_sah_cost(std::span<const Bvh2Node> nodes) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
           const Bvh2Node& n = nodes[i];
           const double area = n.bounds().half_area();
-          acc += (n.is_leaf() || n.index == 0) ? kSahIntersectionCost * area * n.count : kSahTraversalCost * area;
+          acc += (n.is_leaf() || n.index == 0) ? kSahReportIntersectionCost * area * n.count : kSahReportTraversalCost * area;
         }
         return acc;
       },

@@ -128,6 +128,20 @@ inline void set_leaf(Bvh2Node& n, const Aabb& b, uint32_t first, uint32_t count)
   n.count = count;
 }
 
+// The start of the top-down builders: room for n references and the at most
+// 2n - 1 nodes (plus one); an empty input becomes one empty leaf. Returns
+// false when there is nothing to build.
+inline bool start_binary_bvh(BinaryBvh& out, size_t n) {
+  out.prim_ids.resize(n);
+  if (n == 0) {
+    out.nodes.resize(1);
+    set_leaf(out.nodes[0], Aabb::empty(), 0, 0);
+    return false;
+  }
+  out.nodes.resize(2 * n);
+  return true;
+}
+
 // Number of references below each node (for inner nodes the sum over the
 // subtree), indexed like nodes. Children must have larger indices than parents.
 std::vector<uint32_t> subtree_ref_counts(std::span<const Bvh2Node> nodes);

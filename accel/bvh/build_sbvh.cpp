@@ -102,37 +102,22 @@ constexpr size_t kParallelBinSize = 16384;
 
 // Spatial bins of all three axes: clipped boxes, and how many references
 // start (enter) and end (exit) in each bin.
-struct SpatialBins {
-  __m128 lo[3][kMaxSpatialBins];
-  __m128 hi[3][kMaxSpatialBins];
+struct SpatialBins : sah::BinBoxes<kMaxSpatialBins> {
   uint32_t enter[3][kMaxSpatialBins];
   uint32_t exit[3][kMaxSpatialBins];
 
   static std::unique_ptr<SpatialBins> make(int bins) {
     std::unique_ptr<SpatialBins> s(new SpatialBins);
+    s->reset(bins);
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < bins; ++b) {
-        s->lo[a][b] = _mm_set1_ps(std::numeric_limits<float>::infinity());
-        s->hi[a][b] = _mm_set1_ps(-std::numeric_limits<float>::infinity());
-        s->enter[a][b] = s->exit[a][b] = 0;
-      }
+      for (int b = 0; b < bins; ++b) s->enter[a][b] = s->exit[a][b] = 0;
     return s;
   }
-  void add(int a, int b, const Box4& box) {
-    lo[a][b] = _mm_min_ps(lo[a][b], box.lo);
-    hi[a][b] = _mm_max_ps(hi[a][b], box.hi);
-  }
-  Box4 box(int a, int b) const {
-    Box4 r;
-    r.lo = lo[a][b];
-    r.hi = hi[a][b];
-    return r;
-  }
+  void add(int a, int b, const Box4& box) { grow(a, b, box); }
   void merge_from(const SpatialBins& o, int bins) {
+    merge_boxes(o, bins);
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < bins; ++b) {
-        lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
-        hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
         enter[a][b] += o.enter[a][b];
         exit[a][b] += o.exit[a][b];
       }

@@ -17,7 +17,7 @@
 #include <span>
 
 #include "accel/bvh/build_common.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 

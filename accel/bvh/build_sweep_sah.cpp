@@ -26,13 +26,7 @@ class SweepBuilder {
 
   BinaryBvh run() {
     const size_t n = boxes_.size();
-    out_.prim_ids.resize(n);
-    if (n == 0) {
-      out_.nodes.resize(1);
-      set_leaf(out_.nodes[0], Aabb::empty(), 0, 0);
-      return std::move(out_);
-    }
-    out_.nodes.resize(2 * n);
+    if (!start_binary_bvh(out_, n)) return std::move(out_);
     area_.resize(n);
     left_.resize(n);
     temp_.resize(n);

@@ -11,10 +11,8 @@ Bvh2Layout make_bvh2_layout(const WideTree& t, const TriangleMesh& mesh) {
     n.set_bounds(box);
     n.index = static_cast<uint32_t>(out.tris.size());
     n.count = t.leaf_size(leaf);
-    for (uint32_t i = t.leaf_begin[leaf]; i < t.leaf_begin[leaf + 1]; ++i) {
-      const uint32_t id = t.leaf_prims[i];
-      out.tris.push_back(LeafTriangle{mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2), id});
-    }
+    for (uint32_t i = t.leaf_begin[leaf]; i < t.leaf_begin[leaf + 1]; ++i)
+      out.tris.push_back(make_leaf_triangle(mesh, t.leaf_prims[i]));
   };
   out.nodes.resize(1);
   if (t.root_leaf >= 0) {

@@ -8,7 +8,7 @@
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/traverse_bvh2.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 

@@ -6,7 +6,8 @@
 #include <span>
 #include <vector>
 
-#include "accel/core/aabb.h"
+#include "accel/core/sah_report.h"
+#include "base/aabb.h"
 
 namespace raylab {
 
@@ -34,11 +35,7 @@ struct BinaryBvh {
   std::vector<uint32_t> prim_ids;
 };
 
-// Cost constants of the surface area heuristic used to *report* tree quality,
-// identical for every builder so costs are comparable: C_t = 1 per inner node
-// visited, C_i = 1 per primitive tested, normalised by the root's area.
-inline constexpr double kSahTraversalCost = 1.0;
-inline constexpr double kSahIntersectionCost = 1.0;
+// Tree quality is reported with the constants of accel/core/sah_report.h.
 
 struct TreeShape {
   size_t nodes = 0, leaves = 0;

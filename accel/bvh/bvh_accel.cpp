@@ -25,7 +25,9 @@
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/traverse_wide.h"
-#include "accel/util/timer.h"
+#include "accel/core/batch_accelerator.h"
+#include "accel/core/triangle_test_param.h"
+#include "base/timer.h"
 
 namespace raylab {
 
@@ -38,16 +40,18 @@ struct BvhConfig {
   BuilderKind builder = BuilderKind::Binned;
   LayoutKind layout = LayoutKind::Bvh8;
   bool reinsert = false;
-  int leaf = 0;           // max references per leaf (0 = layout default)
-  int block = 0;          // triangles per SIMD block (0 = layout default)
+  // Defaults as declared in bvh_accelerator_info (the spec parser fills
+  // every field; these only matter to code that builds a config directly).
+  int leaf = 16;              // max references per leaf (auto: bvh2 4, wide 2 blocks)
+  int block = 8;              // triangles per SIMD block
   int bins = 32;
-  int binary_leaf = 1;        // ranges this small become binary leaves without SAH test
+  int binary_leaf = 4;        // ranges this small become binary leaves without SAH test
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
   int spatial_bins = 32;      // SBVH: slabs per axis
-  double opt_ms = 500.0;      // reinsertion time budget
-  float node_cost = 1.0f;   // collapse: cost of a node visit
+  int opt_rounds = 32;        // reinsertion rounds (work, not time)
+  float node_cost = 2.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
 };
@@ -62,56 +66,33 @@ class Kernel {
   virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const = 0;
 };
 
-class Bvh2Kernel final : public Kernel {
+class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
  public:
-  Bvh2Kernel(Bvh2Layout layout, TriangleTest tri) : layout_(std::move(layout)), view_(layout_.view()), tri_(tri) {}
+  Bvh2Kernel(Bvh2Layout layout, TriangleTest tri)
+      : BatchAccelerator(tri), layout_(std::move(layout)), view_(layout_.view()) {}
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    dispatch_triangle_test(tri_, [&]<TriangleTest kTest>() {
-      if (stats) {
-        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_bvh2<kTest, false, true>(view_, rays[i], stats);
-      } else {
-        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_bvh2<kTest, false, false>(view_, rays[i], nullptr);
-      }
-    });
-  }
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    dispatch_triangle_test(tri_, [&]<TriangleTest kTest>() {
-      if (stats) {
-        for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_bvh2<kTest, true, true>(view_, rays[i], stats).valid();
-      } else {
-        for (size_t i = 0; i < rays.size(); ++i)
-          occ[i] = traverse_bvh2<kTest, true, false>(view_, rays[i], nullptr).valid();
-      }
-    });
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    return traverse_bvh2<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
 
  private:
   Bvh2Layout layout_;
   Bvh2View view_;
-  TriangleTest tri_;
 };
 
+// The wide layouts test triangles with the vectorised watertight test only.
 template <int N, int W>
-class WideKernel final : public Kernel {
+class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
  public:
-  explicit WideKernel(WideBvh<N, W> bvh) : bvh_(std::move(bvh)) {
+  explicit WideKernel(WideBvh<N, W> bvh)
+      : BatchAccelerator<WideKernel<N, W>, Kernel>(TriangleTest::Watertight), bvh_(std::move(bvh)) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref};
   }
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if (stats) {
-      for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide<N, W, false, true>(view_, rays[i], stats);
-    } else {
-      for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide<N, W, false, false>(view_, rays[i], nullptr);
-    }
-  }
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    if (stats) {
-      for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_wide<N, W, true, true>(view_, rays[i], stats).valid();
-    } else {
-      for (size_t i = 0; i < rays.size(); ++i)
-        occ[i] = traverse_wide<N, W, true, false>(view_, rays[i], nullptr).valid();
-    }
+
+  template <TriangleTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    return traverse_wide<N, W, kAnyHit, kCount>(view_, ray, stats);
   }
   size_t bytes() const { return bvh_.bytes(); }
 
@@ -136,10 +117,55 @@ class BvhAccel final : public Accelerator {
                                            simd::isa_name()));
   }
 
-  BuildStats build(const TriangleMesh& mesh) override {
-    mesh.validate();
-    Timer timer;
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    if (!kernel_) throw std::logic_error("bvh: intersect before build");
+    kernel_->intersect(rays, hits, stats);
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    if (!kernel_) throw std::logic_error("bvh: occluded before build");
+    kernel_->occluded(rays, occ, stats);
+  }
+
+ protected:
+  // Build phases, each timed into BuildStats::extra: the binary tree, its
+  // SAH-optimal collapse, the traversal layout.
+  BuildStats build_impl(const TriangleMesh& mesh) override {
     BuildStats s;
+    const BinaryBvh tree = build_binary_tree(mesh, s);
+    Timer phase;
+    CollapseOptions co;
+    co.width = layout_width(cfg_.layout);
+    co.block_width = block_width();
+    co.max_leaf = cfg_.leaf;
+    co.max_leaf_blocks = co.width == 2 ? 1 << 20 : static_cast<int>(wide_ref::kMaxBlocks);
+    co.node_cost = cfg_.node_cost;
+    co.block_cost = cfg_.block_cost;
+    const WideTree wide = collapse_to_wide(tree, co);
+    const WideShape shape = measure_wide(wide);
+    s.extra["ms_collapse"] = phase.ms();
+    s.extra["avg_leaf_size"] = shape.avg_leaf_size;
+    s.extra["child_fill"] = shape.child_fill;
+
+    phase.reset();
+    s.bytes = make_kernel(wide, shape, mesh, s);
+    s.extra["ms_layout"] = phase.ms();
+    s.nodes = cfg_.layout == LayoutKind::Bvh2 ? 2 * shape.nodes + 1 : shape.nodes;
+    s.leaves = shape.leaves;
+    s.max_depth = shape.max_depth;
+    s.avg_depth = shape.avg_leaf_depth;
+    s.sah_cost = shape.sah_cost;
+    return s;
+  }
+
+ private:
+  int block_width() const { return cfg_.layout == LayoutKind::Bvh2 ? 1 : cfg_.block; }
+
+  // The canonical binary tree by the configured builder, then the optional
+  // reinsertion pass. Builders bound the depth (median splits beyond
+  // kForceMedianDepth, LBVH by its key length, reinsertion by rejecting
+  // deeper results); the wide layouts check their depth against the stack.
+  BinaryBvh build_binary_tree(const TriangleMesh& mesh, BuildStats& s) const {
+    Timer phase;
     const size_t n = mesh.num_triangles();
     // Triangle boxes and centroids (box centres); the binned builder takes
     // its references directly, the other builders the two arrays.
@@ -164,17 +190,12 @@ class BvhAccel final : public Accelerator {
         }
       });
     }
-
-    const int width = layout_width(cfg_.layout);
-    const int block = cfg_.layout == LayoutKind::Bvh2 ? 1 : cfg_.block;
-    const int leaf = cfg_.leaf;
-
     BuildOptions bo;
     bo.bins = cfg_.bins;
     bo.max_leaf = 1;  // leaves are formed by the SAH-optimal collapse
-    bo.leaf_threshold = std::min(cfg_.binary_leaf, leaf);
-    s.extra["ms_prepare"] = timer.ms();
-    Timer phase;
+    bo.leaf_threshold = std::min(cfg_.binary_leaf, cfg_.leaf);
+    s.extra["ms_prepare"] = phase.ms();
+    phase.reset();
     BinaryBvh tree;
     switch (cfg_.builder) {
       case BuilderKind::Binned: tree = build_binned_sah(std::move(refs), bo); break;
@@ -197,7 +218,7 @@ class BvhAccel final : public Accelerator {
     s.extra["refs_per_triangle"] = n ? static_cast<double>(tree.prim_ids.size()) / n : 0.0;
     if (cfg_.reinsert) {
       ReinsertionOptions ro;
-      ro.time_budget_ms = cfg_.opt_ms;
+      ro.max_rounds = cfg_.opt_rounds;
       ReinsertionStats rs;
       tree = optimize_reinsertion(tree, ro, &rs);
       s.extra["sah_before_opt"] = rs.sah_before;
@@ -207,68 +228,37 @@ class BvhAccel final : public Accelerator {
       s.extra["opt_moves"] = static_cast<double>(rs.moves);
     }
     phase.reset();
-    // Builders bound the depth (median splits beyond kForceMedianDepth, LBVH
-    // by its key length, reinsertion by rejecting deeper results); the wide
-    // layouts check their depth against the stack below.
     s.extra["sah_tree"] = tree_sah_cost(tree.nodes);
     s.extra["ms_measure"] = phase.ms();
+    return tree;
+  }
 
-    phase.reset();
-    CollapseOptions co;
-    co.width = width;
-    co.block_width = block;
-    co.max_leaf = leaf;
-    co.max_leaf_blocks = width == 2 ? 1 << 20 : static_cast<int>(wide_ref::kMaxBlocks);
-    co.node_cost = cfg_.node_cost;
-    co.block_cost = cfg_.block_cost;
-    const WideTree wide = collapse_to_wide(tree, co);
-    const WideShape shape = measure_wide(wide);
-    s.extra["ms_collapse"] = phase.ms();
-    s.extra["avg_leaf_size"] = shape.avg_leaf_size;
-    s.extra["child_fill"] = shape.child_fill;
-
-    phase.reset();
+  // The traversal structure for the configured layout; returns its bytes.
+  size_t make_kernel(const WideTree& wide, const WideShape& shape, const TriangleMesh& mesh, BuildStats& s) {
     size_t bytes = 0;
     if (cfg_.layout == LayoutKind::Bvh2) {
       Bvh2Layout l = make_bvh2_layout(wide, mesh);
       bytes = l.bytes();
       kernel_ = std::make_unique<Bvh2Kernel>(std::move(l), cfg_.tri);
-    } else {
-      if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
-        throw std::runtime_error("bvh: tree too deep for the traversal stack");
-      if (cfg_.layout == LayoutKind::Bvh4) {
-        if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, bytes);
-        else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, bytes);
-        else kernel_ = make_wide_kernel<4, 16>(wide, mesh, bytes);
-      } else {
-        if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, bytes);
-        else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, bytes);
-        else kernel_ = make_wide_kernel<8, 16>(wide, mesh, bytes);
-      }
-      s.extra["simd_bits"] = simd::isa_bits();
-      s.extra["block_width"] = block;
+      return bytes;
     }
-    s.extra["ms_layout"] = phase.ms();
-    s.build_ms = timer.ms();
-    s.bytes = bytes;
-    s.nodes = cfg_.layout == LayoutKind::Bvh2 ? 2 * shape.nodes + 1 : shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
-    s.sah_cost = shape.sah_cost;
-    return s;
+    if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
+      throw std::runtime_error("bvh: tree too deep for the traversal stack");
+    const int block = block_width();
+    if (cfg_.layout == LayoutKind::Bvh4) {
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, bytes);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, bytes);
+    } else {
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, bytes);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, bytes);
+    }
+    s.extra["simd_bits"] = simd::isa_bits();
+    s.extra["block_width"] = block;
+    return bytes;
   }
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if (!kernel_) throw std::logic_error("bvh: intersect before build");
-    kernel_->intersect(rays, hits, stats);
-  }
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    if (!kernel_) throw std::logic_error("bvh: occluded before build");
-    kernel_->occluded(rays, occ, stats);
-  }
-
- private:
   BvhConfig cfg_;
   std::unique_ptr<Kernel> kernel_;
 };
@@ -278,7 +268,7 @@ class BvhAccel final : public Accelerator {
 std::string bvh_kernel_isa() { return simd::isa_name(); }
 
 AcceleratorInfo bvh_accelerator_info() {
-  return AcceleratorInfo{
+  AcceleratorInfo info{
       "bvh",
       fmt::format("BVH family: SAH builders, optional reinsertion, SAH-optimal wide collapse, SIMD kernels ({})",
                   simd::isa_name()),
@@ -290,13 +280,13 @@ AcceleratorInfo bvh_accelerator_info() {
        {"bins", "32", "SAH bins per axis (2..256)"},
        {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
-       {"budget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
+       {"sbudget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
        {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)"},
-       {"opt_ms", "500", "reinsert: time budget in ms"},
+       {"opt_rounds", "32", "reinsert: at most this many rounds (work-bounded: the tree does not depend on machine load)"},
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
-       {"tri", "watertight", "triangle test: watertight (Woop et al. 2013); mt (Moller-Trumbore) with layout=bvh2 only"}},
+       triangle_test_param("; mt with layout=bvh2 only")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
         const auto& b = p.choice("builder", {"binned", "sweep", "sbvh", "lbvh"});
@@ -314,25 +304,46 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.binary_leaf < 1 || c.binary_leaf > 16) throw SpecError("bvh: bleaf must be in 1..16");
         if (c.bins < 2 || c.bins > 256) throw SpecError("bvh: bins must be in 2..256");
         c.alpha = static_cast<float>(p.real("alpha"));
-        c.split_budget = static_cast<float>(p.real("budget"));
-        c.opt_ms = p.real("opt_ms");
+        c.split_budget = static_cast<float>(p.real("sbudget"));
+        c.opt_rounds = p.integer("opt_rounds");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
         if (c.spatial_bins < 2 || c.spatial_bins > 256) throw SpecError("bvh: sbins must be in 2..256");
         if (c.spatial_min < 0) throw SpecError("bvh: smin must be >= 0");
         if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
-          throw SpecError("bvh: alpha must be >= 0 and budget in 0..4");
-        if (!(c.opt_ms >= 0.0 && c.opt_ms <= 1e6)) throw SpecError("bvh: opt_ms must be in 0..1e6");
+          throw SpecError("bvh: alpha must be >= 0 and sbudget in 0..4");
+        if (c.opt_rounds < 0 || c.opt_rounds > 1000) throw SpecError("bvh: opt_rounds must be in 0..1000");
         c.node_cost = static_cast<float>(p.real("ct"));
         c.block_cost = static_cast<float>(p.real("ci"));
         if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
           throw SpecError("bvh: ct and ci must be positive");
-        const auto& t = p.choice("tri", {"watertight", "mt"});
-        c.tri = t == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight;
+        c.tri = parse_triangle_test(p);
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
           throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
         return std::make_unique<BvhAccel>(c);
       }};
+  info.caps.mt_variant = "tri=mt,layout=bvh2";
+  info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
+                "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16"};
+  info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
+  info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
+                {"ms_tree", "ms: the binary tree"},
+                {"ms_measure", "ms: measuring the binary tree"},
+                {"ms_collapse", "ms: SAH-optimal collapse to the layout's width"},
+                {"ms_layout", "ms: the traversal layout (nodes, triangle blocks)"},
+                {"refs_per_triangle", "references per triangle (sbvh duplicates split triangles)"},
+                {"spatial_splits", "sbvh: spatial splits taken"},
+                {"sah_tree", "SAH cost of the binary tree before the collapse (reporting constants)"},
+                {"sah_before_opt", "reinsert: SAH cost before"},
+                {"sah_after_opt", "reinsert: SAH cost after"},
+                {"opt_ms", "reinsert: ms spent"},
+                {"opt_rounds", "reinsert: rounds run"},
+                {"opt_moves", "reinsert: subtrees moved"},
+                {"avg_leaf_size", "mean triangles per leaf"},
+                {"child_fill", "mean children per inner node over the width"},
+                {"simd_bits", "wide layouts: SIMD width of the kernels in bits"},
+                {"block_width", "wide layouts: triangles per SIMD block"}};
+  return info;
 }
 
 }  // namespace raylab

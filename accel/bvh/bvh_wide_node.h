@@ -18,7 +18,7 @@
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/triangle_block.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 

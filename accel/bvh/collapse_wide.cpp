@@ -211,7 +211,7 @@ WideShape measure_wide(const WideTree& t) {
   if (t.root_leaf >= 0) {
     s.leaves = t.leaf_count();
     s.avg_leaf_size = t.leaf_prims.size();
-    s.sah_cost = kSahIntersectionCost * static_cast<double>(t.leaf_prims.size());
+    s.sah_cost = kSahReportIntersectionCost * static_cast<double>(t.leaf_prims.size());
     return s;
   }
   const double root_area = t.root_box.half_area();
@@ -228,7 +228,7 @@ WideShape measure_wide(const WideTree& t) {
     s.nodes++;
     Aabb box;
     for (int c = 0; c < n.count; ++c) box.extend(n.child[c].box);
-    cost += kSahTraversalCost * box.half_area();
+    cost += kSahReportTraversalCost * box.half_area();
     children += n.count;
     for (int c = 0; c < n.count; ++c) {
       const WideTree::Child& ch = n.child[c];
@@ -236,7 +236,7 @@ WideShape measure_wide(const WideTree& t) {
         s.leaves++;
         s.max_depth = std::max(s.max_depth, it.depth + 1);
         depth_sum += it.depth + 1;
-        cost += kSahIntersectionCost * ch.box.half_area() * t.leaf_size(ch.index);
+        cost += kSahReportIntersectionCost * ch.box.half_area() * t.leaf_size(ch.index);
       } else {
         stack.push_back({ch.index, it.depth + 1});
       }

@@ -59,7 +59,7 @@ struct WideShape {
   size_t nodes = 0, leaves = 0;
   int max_depth = 0;         // of leaves, counted in wide nodes from the root (root = 0)
   double avg_leaf_depth = 0.0;
-  double sah_cost = 0.0;     // kSahTraversalCost per wide node, kSahIntersectionCost per reference
+  double sah_cost = 0.0;     // kSahReportTraversalCost per wide node, kSahReportIntersectionCost per reference
   double avg_leaf_size = 0.0;
   double child_fill = 0.0;   // mean children per wide node
 };

@@ -11,7 +11,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
-#include "accel/util/timer.h"
+#include "base/timer.h"
 
 namespace raylab {
 
@@ -55,7 +55,7 @@ class Reinserter {
       const size_t batch = std::max<size_t>(64, static_cast<size_t>(opt_.batch_fraction * static_cast<double>(m)));
       std::vector<std::pair<float, uint32_t>> measure(m);
       std::vector<Move> found;
-      for (; rounds < opt_.max_rounds && timer.ms() < opt_.time_budget_ms; ++rounds) {
+      for (; rounds < opt_.max_rounds; ++rounds) {
         // Candidates: the worst nodes by Bittner's combined measure.
         tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
           for (size_t i = r.begin(); i < r.end(); ++i) measure[i] = {inefficiency(static_cast<uint32_t>(i)), static_cast<uint32_t>(i)};
@@ -129,8 +129,8 @@ class Reinserter {
         [&](const tbb::blocked_range<size_t>& r, double acc) {
           for (size_t i = r.begin(); i < r.end(); ++i) {
             const double a = box_[i].half_area();
-            acc += is_leaf(static_cast<uint32_t>(i)) ? kSahIntersectionCost * a * in_.nodes[i].count
-                                                      : kSahTraversalCost * a;
+            acc += is_leaf(static_cast<uint32_t>(i)) ? kSahReportIntersectionCost * a * in_.nodes[i].count
+                                                      : kSahReportTraversalCost * a;
           }
           return acc;
         },

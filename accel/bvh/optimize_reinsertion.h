@@ -5,7 +5,7 @@
 // Bittner, "Parallel Reinsertion for Bounding Volume Hierarchy Optimization"
 // (CGF 2018):
 //
-//   repeat until the time budget is spent or a round gains < min_gain:
+//   repeat for at most max_rounds rounds, or until a round gains < min_gain:
 //     pick the nodes with the worst inefficiency measure
 //       (area * area/mean child area * area/min child area, Bittner 4.1),
 //     for each, in parallel, find by branch and bound the position where
@@ -17,13 +17,14 @@
 // Leaves are moved whole, so only inner-node areas change; the SAH cost used
 // is the reporting one (bvh2_node.h constants). The result is re-laid out
 // depth first. Trees that would exceed kMaxTreeDepth are left unchanged.
+// The work is bounded (rounds x batch), never the wall clock: the same input
+// gives the same tree however loaded the machine is.
 #include "accel/bvh/build_common.h"
 
 namespace raylab {
 
 struct ReinsertionOptions {
-  double time_budget_ms = 500.0;  // wall-clock bound for the whole optimisation
-  int max_rounds = 32;
+  int max_rounds = 32;            // 0 leaves the tree unchanged
   double batch_fraction = 0.15;   // nodes considered per round, as a fraction of all nodes
   double min_gain = 2e-4;         // stop when a round improves the SAH cost by less (relative)
 };

@@ -21,29 +21,26 @@ namespace raylab::sah {
 inline constexpr int kMaxBins = 256;
 inline constexpr size_t kParallelBinSize = 32768;  // ranges at least this large bin in parallel
 
-// Bins are plain storage (default-initialised, i.e. not at all): a node
-// initialises only the bins it uses, which matters because most nodes are small.
-struct BinSet {
-  __m128 lo[3][kMaxBins];
-  __m128 hi[3][kMaxBins];
-  uint32_t count[3][kMaxBins];
+// The boxes of bins on three axes (SSE lanes x, y, z, -). Bins are plain
+// storage (default-initialised, i.e. not at all): a node initialises only
+// the bins it uses, which matters because most nodes are small.
+template <int kBins>
+struct BinBoxes {
+  __m128 lo[3][kBins];
+  __m128 hi[3][kBins];
 
-  static std::unique_ptr<BinSet> make(int bins) {
-    std::unique_ptr<BinSet> s(new BinSet);
+  void reset(int bins) {
     const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
     const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < bins; ++b) {
-        s->lo[a][b] = inf;
-        s->hi[a][b] = ninf;
-        s->count[a][b] = 0;
+        lo[a][b] = inf;
+        hi[a][b] = ninf;
       }
-    return s;
   }
-  void add(int axis, int bin, const Box4& b) {
-    lo[axis][bin] = _mm_min_ps(lo[axis][bin], b.lo);
-    hi[axis][bin] = _mm_max_ps(hi[axis][bin], b.hi);
-    count[axis][bin]++;
+  void grow(int axis, int bin, const Box4& box) {
+    lo[axis][bin] = _mm_min_ps(lo[axis][bin], box.lo);
+    hi[axis][bin] = _mm_max_ps(hi[axis][bin], box.hi);
   }
   Box4 box(int axis, int bin) const {
     Box4 r;
@@ -51,13 +48,34 @@ struct BinSet {
     r.hi = hi[axis][bin];
     return r;
   }
-  void merge_from(const BinSet& o, int bins) {
+  void merge_boxes(const BinBoxes& o, int bins) {
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < bins; ++b) {
         lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
         hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
-        count[a][b] += o.count[a][b];
       }
+  }
+};
+
+// Object bins: boxes and reference counts.
+struct BinSet : BinBoxes<kMaxBins> {
+  uint32_t count[3][kMaxBins];
+
+  static std::unique_ptr<BinSet> make(int bins) {
+    std::unique_ptr<BinSet> s(new BinSet);
+    s->reset(bins);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) s->count[a][b] = 0;
+    return s;
+  }
+  void add(int axis, int bin, const Box4& b) {
+    grow(axis, bin, b);
+    count[axis][bin]++;
+  }
+  void merge_from(const BinSet& o, int bins) {
+    merge_boxes(o, bins);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) count[a][b] += o.count[a][b];
   }
 };
 

@@ -14,21 +14,15 @@
 
 #include "accel/accelerator.h"
 #include "accel/bvh/bvh2_node.h"
-#include "accel/core/intersect_triangle.h"
+#include "accel/core/hit_recorder.h"
+#include "accel/core/leaf_triangle.h"
 #include "accel/core/slab_test.h"
 
 namespace raylab {
 
-// Triangle vertices copied in leaf order, next to their original ids, so a
-// leaf's triangles are contiguous in memory.
-struct LeafTriangle {
-  Vec3f p0, p1, p2;
-  uint32_t prim;
-};
-
 struct Bvh2View {
   const Bvh2Node* nodes = nullptr;
-  const LeafTriangle* tris = nullptr;  // indexed like BinaryBvh::prim_ids
+  const LeafTriangle* tris = nullptr;  // in leaf order: indexed like BinaryBvh::prim_ids
   bool empty = true;
 };
 
@@ -38,16 +32,14 @@ inline constexpr int kBvh2StackSize = 192;
 
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
-  Hit hit;
-  if constexpr (kCount) stats->rays++;
-  if (bvh.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
+  if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
 
   // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
   const SlabRay sr(ray);
   const TrianglePrecompute<kTest> pre(ray);
   const float tmin = ray.tmin;
-  float tmax = ray.tmax;
-  float box_tmax = pad_far(tmax);
+  float box_tmax = pad_far(rec.tmax());
 
   struct Entry {
     uint32_t node;
@@ -57,29 +49,21 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
   int sp = 0;
 
   float t_root;
-  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, box_tmax, t_root)) return hit;
+  rec.count_nodes(1);
+  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, box_tmax, t_root)) return rec.hit();
   uint32_t node = 0;
 
   while (true) {
     const Bvh2Node& n = bvh.nodes[node];
-    if constexpr (kCount) stats->nodes_visited++;
     if (n.count != 0) {
-      const LeafTriangle* tri = bvh.tris + n.index;
-      for (uint32_t i = 0; i < n.count; ++i, ++tri) {
-        if constexpr (kCount) stats->triangle_tests++;
-        float t, u, v;
-        if (pre.intersect(ray, tri->p0, tri->p1, tri->p2, tmin, tmax, t, u, v)) {
-          if (t < tmax || !hit.valid()) {
-            hit = Hit{t, u, v, tri->prim};
-            tmax = t;
-            box_tmax = pad_far(tmax);
-            if constexpr (kAnyHit) return hit;
-          }
-        }
+      if (intersect_leaf(pre, ray, bvh.tris + n.index, n.count, rec)) {
+        if constexpr (kAnyHit) return rec.hit();
+        box_tmax = pad_far(rec.tmax());
       }
     } else {
       const Bvh2Node& l = bvh.nodes[n.index];
       const Bvh2Node& r = bvh.nodes[n.index + 1];
+      rec.count_nodes(2);
       float tl, tr;
       const bool hl = slab_test(sr, l.lo, l.hi, tmin, box_tmax, tl);
       const bool hr = slab_test(sr, r.lo, r.hi, tmin, box_tmax, tr);
@@ -104,7 +88,7 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
     }
     // Pop the next subtree that can still hold a closer hit.
     while (true) {
-      if (sp == 0) return hit;
+      if (sp == 0) return rec.hit();
       const Entry e = stack[--sp];
       if (e.t <= box_tmax) {
         node = e.node;

@@ -29,8 +29,8 @@
 #include <cfloat>
 #include <cstdint>
 
-#include "accel/accelerator.h"
 #include "accel/bvh/bvh_wide_node.h"
+#include "accel/core/hit_recorder.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/core/slab_test.h"
@@ -77,7 +77,7 @@ struct WideNodeRay {
 // 1 / +-0 = +-inf, and the 0 * inf = NaN of a ray in a face plane is dropped
 // by NaN-ignoring min/max, which leaves that slab unbounded, as it should be.
 inline bool ray_is_axis_parallel(const Ray& r) {
-  constexpr float kTiny = 1e-30f;  // as safe_reciprocal in slab_test.h
+  constexpr float kTiny = 1e-30f;  // as the clamp of init_node_ray
   return std::fabs(r.dir.x()) < kTiny || std::fabs(r.dir.y()) < kTiny || std::fabs(r.dir.z()) < kTiny;
 }
 
@@ -143,19 +143,6 @@ template <int N>
   }
 }
 
-// ray_is_valid(r) && r.tmin <= r.tmax, inline: finite origin and direction,
-// non-zero direction, tmin and tmax not NaN, tmin <= tmax.
-inline bool wide_ray_valid(const Ray& r) {
-  const float o[3] = {r.org.x(), r.org.y(), r.org.z()};
-  const float d[3] = {r.dir.x(), r.dir.y(), r.dir.z()};
-  bool finite = true, nonzero = false;
-  for (int a = 0; a < 3; ++a) {
-    finite &= (o[a] - o[a] == 0.0f) & (d[a] - d[a] == 0.0f);  // false for inf and NaN
-    nonzero |= d[a] != 0.0f;
-  }
-  return finite & nonzero & (r.tmin <= r.tmax);  // also false when either is NaN
-}
-
 // Tests the N child boxes of a node; returns the mask of children whose
 // (padded) slab interval overlaps [tmin, tmax], and their entry distances.
 // kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
@@ -215,17 +202,102 @@ template <int N, int W>
   for (int i = 0; i < lines; ++i) _mm_prefetch(p + 64 * i, _MM_HINT_T0);
 }
 
+// An inner node with two or more hit children (mask), any hit: no ordering
+// by distance. A ray leaving a surface starts just outside the leaf box of
+// the triangle it will hit first, and every other box around its origin ties
+// at distance 0, so distance order is a poor guess here. Leaf children go
+// first (one test may end the ray), then children in descending slot order
+// (as Embree's occlusion traversal); measured best on the benchmark scenes.
+// Pushes all but one child (prefetched) and returns the one to visit next.
+template <int N, int W>
+[[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+                                                       uint64_t* stack, int& sp) {
+  uint32_t leaves = 0;
+  for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
+  leaves &= mask;
+  for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
+    const uint32_t c = child[simd::ctz(m)];
+    prefetch_child(bvh, c);
+    stack[sp++] = child_key(0.0f, c);
+  }
+  if (leaves == 0) return key_ref(stack[--sp]);
+  while (true) {
+    const uint32_t c = child[simd::ctz(leaves)];
+    leaves &= leaves - 1;
+    if (leaves == 0) return c;
+    prefetch_child(bvh, c);
+    stack[sp++] = child_key(0.0f, c);
+  }
+}
+
+// The same for closest hit: two children are ordered by one comparison,
+// three or more sorted by distance (sort_network.h) and pushed so the
+// nearest is on top; returns the nearest.
+template <int N, int W>
+[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+  alignas(64) float dist[N];
+  tnear.store(dist);
+  const uint32_t i0 = simd::ctz(mask);
+  const uint32_t rest = mask & (mask - 1);
+  const uint32_t i1 = simd::ctz(rest);
+  if ((rest & (rest - 1)) == 0) {
+    // Two children: order their keys with min/max (no branch to mispredict).
+    const uint64_t k0 = child_key(dist[i0], child[i0]);
+    const uint64_t k1 = child_key(dist[i1], child[i1]);
+    prefetch_child(bvh, key_ref(std::max(k0, k1)));
+    stack[sp++] = std::max(k0, k1);
+    return key_ref(std::min(k0, k1));
+  }
+  // Three or more: sort by distance, push all but the nearest.
+  const int k = simd::popcount(mask);
+#if defined(RAYLAB_SIMD_AVX512)
+  if constexpr (N == 8) {
+    const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
+    // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
+    const __m512i keys = _mm512_or_si512(
+        _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
+        _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
+                                                             _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
+    __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
+    sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
+    _mm512_storeu_si512(stack + sp, sorted);
+    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
+    sp += k - 1;
+    return key_ref(stack[sp]);
+  }
+#endif
+  uint64_t* keys = stack + sp;
+  int n = 0;
+  for (uint32_t m = mask; m != 0; m &= m - 1) {
+    const uint32_t i = simd::ctz(m);
+    keys[n++] = child_key(dist[i], child[i]);
+  }
+  sort8_keys_descending(keys, n);
+  sp += k - 1;
+  return key_ref(stack[sp]);
+}
+
+// Counting (kCount): a node visited is a child box tested, so an inner node
+// counts its non-empty child slots (accel/core/hit_recorder.h); the root's
+// box is not tested.
+template <int N>
+inline uint64_t count_children(const WideNode<N>& node) {
+  uint64_t c = 0;
+  for (int i = 0; i < N; ++i) c += node.child[i] != wide_ref::kEmpty;
+  return c;
+}
+
 template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
 inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   using V = simd::vfloat<N>;
-  Hit hit;
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
   init_node_ray(nr, ray, kAxisParallel);
   BlockRay<W> br{};  // filled at the first leaf
   bool br_ready = false;
   const float tmin = ray.tmin;
-  float tmax = ray.tmax;
   const V tmin_v = V::broadcast(tmin == 0.0f ? 0.0f : tmin);  // -0 as +0 for the integer-order min/max
 
   alignas(64) uint64_t stack[kWideStackSize];
@@ -240,6 +312,7 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
         // Keys clamp negative entry distances (tmin < 0) to 0: with a hit at
         // t < 0 only the subtrees entered at t > 0 can be culled here (the
         // others are culled, exactly, by the box test when visited).
+        const float tmax = rec.tmax();
         if (key_dist(e) > (tmax >= 0.0f ? tmax * kSlabFarScale : 0.0f)) continue;
       }
       cur = key_ref(e);
@@ -250,12 +323,12 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
 
   while (true) {
     if (!wide_ref::is_leaf(cur)) {
-      if constexpr (kCount) stats->nodes_visited++;
       const WideNode<N>& node = bvh.nodes[cur];
+      if constexpr (kCount) rec.count_nodes(count_children(node));
       V tnear;
-      uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(tmax), tnear);
+      uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
       if (mask == 0) {
-        if (!pop()) return hit;
+        if (!pop()) return rec.hit();
         continue;
       }
       const uint32_t* child = node.child;
@@ -265,77 +338,8 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
         cur = child[i0];
         continue;
       }
-      if constexpr (kAnyHit) {
-        // Any hit: no ordering by distance. A ray leaving a surface starts
-        // just outside the leaf box of the triangle it will hit first, and
-        // every other box around its origin ties at distance 0, so distance
-        // order is a poor guess here. Leaf children go first (one test may end
-        // the ray), then children in descending slot order (as Embree's
-        // occlusion traversal); measured best on the benchmark scenes.
-        uint32_t leaves = 0;
-        for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
-        leaves &= mask;
-        for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
-          const uint32_t c = child[simd::ctz(m)];
-          prefetch_child(bvh, c);
-          stack[sp++] = child_key(0.0f, c);
-        }
-        if (leaves == 0) {
-          cur = key_ref(stack[--sp]);
-          continue;
-        }
-        while (true) {
-          const uint32_t c = child[simd::ctz(leaves)];
-          leaves &= leaves - 1;
-          if (leaves == 0) {
-            cur = c;
-            break;
-          }
-          prefetch_child(bvh, c);
-          stack[sp++] = child_key(0.0f, c);
-        }
-        continue;
-      }
-      alignas(64) float dist[N];
-      tnear.store(dist);
-      const uint32_t i1 = simd::ctz(rest);
-      if ((rest & (rest - 1)) == 0) {
-        // Two children: order their keys with min/max (no branch to mispredict).
-        const uint64_t k0 = child_key(dist[i0], child[i0]);
-        const uint64_t k1 = child_key(dist[i1], child[i1]);
-        prefetch_child(bvh, key_ref(std::max(k0, k1)));
-        stack[sp++] = std::max(k0, k1);
-        cur = key_ref(std::min(k0, k1));
-        continue;
-      }
-      // Three or more: sort by distance, push all but the nearest.
-      const int k = simd::popcount(mask);
-#if defined(RAYLAB_SIMD_AVX512)
-      if constexpr (N == 8) {
-        const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
-        // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
-        const __m512i keys = _mm512_or_si512(
-            _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
-            _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
-                                                                 _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
-        __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
-        sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
-        _mm512_storeu_si512(stack + sp, sorted);
-        for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
-        sp += k - 1;
-        cur = key_ref(stack[sp]);
-        continue;
-      }
-#endif
-      uint64_t* keys = stack + sp;
-      int n = 0;
-      for (uint32_t m = mask; m != 0; m &= m - 1) {
-        const uint32_t i = simd::ctz(m);
-        keys[n++] = child_key(dist[i], child[i]);
-      }
-      sort8_keys_descending(keys, n);
-      sp += k - 1;
-      cur = key_ref(stack[sp]);
+      cur = kAnyHit ? descend_any_hit(bvh, child, mask, stack, sp)
+                    : descend_closest(bvh, child, mask, tnear, stack, sp);
       continue;
     }
 
@@ -344,38 +348,17 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
       br.init(WatertightRay(ray));
       br_ready = true;
     }
-    const uint32_t nblocks = wide_ref::leaf_blocks(cur);
-    const TriangleBlock<W>* blk = bvh.blocks + wide_ref::leaf_first(cur);
-    if constexpr (kCount) stats->nodes_visited += nblocks != 0;
-    for (uint32_t b = 0; b < nblocks; ++b) {
-      if constexpr (kCount) stats->triangle_tests += static_cast<uint64_t>(blk[b].count());
-      BlockHits<W> bh;
-      uint32_t m = intersect_block<W>(blk[b], br, tmin, tmax, bh);
-      if (m == 0) continue;
-      uint32_t best = simd::ctz(m);
-      if constexpr (kAnyHit) return Hit{bh.t[best], bh.u[best], bh.v[best], blk[b].prim[best]};
-      float bt = bh.t[best];
-      for (m &= m - 1; m != 0; m &= m - 1) {
-        const uint32_t i = simd::ctz(m);
-        if (bh.t[i] < bt) {
-          bt = bh.t[i];
-          best = i;
-        }
-      }
-      if (bt < tmax || !hit.valid()) {
-        hit = Hit{bt, bh.u[best], bh.v[best], blk[b].prim[best]};
-        tmax = bt;
-      }
+    if (intersect_block_leaf<W>(bvh.blocks + wide_ref::leaf_first(cur), wide_ref::leaf_blocks(cur), br, tmin, rec)) {
+      if constexpr (kAnyHit) return rec.hit();
     }
-    if (!pop()) return hit;
+    if (!pop()) return rec.hit();
   }
 }
 
 // The traversal entry point: validity check, then the kernel for the ray's kind.
 template <int N, int W, bool kAnyHit, bool kCount>
 inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
-  if constexpr (kCount) stats->rays++;
-  if (!wide_ray_valid(ray)) return Hit{};
+  if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
   // The fast kernel needs finite reciprocals and tmin >= 0 (see
   // intersect_children); everything else takes the exact form.
   if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f)) [[unlikely]]

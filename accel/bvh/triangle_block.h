@@ -140,6 +140,37 @@ template <int W>
   return mask;
 }
 
+// The wide BVH's leaf function: tests a leaf's blocks on [tmin, rec.tmax()]
+// and offers each block's nearest hit to the recorder (any hit: the first
+// lane hit). True when a hit was kept.
+template <int W, typename Recorder>
+[[gnu::always_inline]] inline bool intersect_block_leaf(const TriangleBlock<W>* blk, uint32_t nblocks,
+                                                        const BlockRay<W>& br, float tmin, Recorder& rec) {
+  bool kept = false;
+  for (uint32_t b = 0; b < nblocks; ++b) {
+    rec.count_triangles(static_cast<uint64_t>(blk[b].count()));
+    BlockHits<W> bh;
+    uint32_t m = intersect_block<W>(blk[b], br, tmin, rec.tmax(), bh);
+    if (m == 0) continue;
+    uint32_t best = simd::ctz(m);
+    float bt = bh.t[best];
+    if constexpr (!Recorder::kStopAtFirstHit) {
+      for (m &= m - 1; m != 0; m &= m - 1) {
+        const uint32_t i = simd::ctz(m);
+        if (bh.t[i] < bt) {
+          bt = bh.t[i];
+          best = i;
+        }
+      }
+    }
+    if (rec.record(bt, bh.u[best], bh.v[best], blk[b].prim[best])) {
+      kept = true;
+      if constexpr (Recorder::kStopAtFirstHit) return true;
+    }
+  }
+  return kept;
+}
+
 // Fills a block from up to W triangles (ids and their three vertices);
 // missing lanes repeat the first triangle.
 template <int W, typename VertexFn>

@@ -16,8 +16,8 @@
 #include <cstdint>
 #include <utility>
 
-#include "accel/core/ray.h"
-#include "accel/core/vec.h"
+#include "base/ray.h"
+#include "base/vec.h"
 
 namespace raylab {
 

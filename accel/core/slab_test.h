@@ -20,8 +20,8 @@
 #include <cmath>
 #include <limits>
 
-#include "accel/core/aabb.h"
-#include "accel/core/ray.h"
+#include "base/aabb.h"
+#include "base/ray.h"
 
 namespace raylab {
 
@@ -31,12 +31,6 @@ inline constexpr float kSlabFarScaleNeg = 1.0f - 2.0f * kFloatGamma3;
 
 // A far distance padded outward: up when positive, towards zero when negative.
 inline float pad_far(float t) { return t * (t >= 0.0f ? kSlabFarScale : kSlabFarScaleNeg); }
-
-inline float safe_reciprocal(float d) {
-  constexpr float kTiny = 1e-30f;
-  if (std::fabs(d) < kTiny) d = std::copysign(kTiny, d);
-  return 1.0f / d;
-}
 
 struct SlabRay {
   Vec3f org;
@@ -52,30 +46,12 @@ struct SlabRay {
   }
 };
 
-// Box given as lo/hi arrays. Returns true when [tmin, tmax] overlaps the box's
-// (conservatively padded) interval; writes the entry distance.
-inline bool slab_test(const SlabRay& r, const float lo[3], const float hi[3], float tmin, float tmax,
-                      float& t_entry) {
+// The ray's [tmin, tmax] clipped to a box given as lo/hi arrays (the far
+// planes conservatively padded): entry and exit distances; true when the
+// clipped interval is not empty.
+[[gnu::always_inline]] inline bool clip_to_box(const SlabRay& r, const float lo[3], const float hi[3], float tmin,
+                                               float tmax, float& t_enter, float& t_exit) {
   const float* bounds[2] = {lo, hi};
-  float t0 = tmin, t1 = tmax;
-  for (int a = 0; a < 3; ++a) {
-    const float tn = (bounds[r.neg[a]][a] - r.org[a]) * r.inv_dir[a];
-    const float tf = pad_far((bounds[1 - r.neg[a]][a] - r.org[a]) * r.inv_dir[a]);
-    t0 = tn > t0 ? tn : t0;
-    t1 = tf < t1 ? tf : t1;
-  }
-  t_entry = t0;
-  return t0 <= t1;
-}
-
-inline bool slab_test(const SlabRay& r, const Aabb& b, float tmin, float tmax, float& t_entry) {
-  return slab_test(r, b.lo.data(), b.hi.data(), tmin, tmax, t_entry);
-}
-
-// Entry and exit distances of the ray's [tmin, tmax] clipped to a box.
-inline bool clip_to_box(const SlabRay& r, const Aabb& b, float tmin, float tmax, float& t_enter,
-                        float& t_exit) {
-  const float* bounds[2] = {b.lo.data(), b.hi.data()};
   float t0 = tmin, t1 = tmax;
   for (int a = 0; a < 3; ++a) {
     const float tn = (bounds[r.neg[a]][a] - r.org[a]) * r.inv_dir[a];
@@ -86,6 +62,21 @@ inline bool clip_to_box(const SlabRay& r, const Aabb& b, float tmin, float tmax,
   t_enter = t0;
   t_exit = t1;
   return t0 <= t1;
+}
+
+inline bool clip_to_box(const SlabRay& r, const Aabb& b, float tmin, float tmax, float& t_enter, float& t_exit) {
+  return clip_to_box(r, b.lo.data(), b.hi.data(), tmin, tmax, t_enter, t_exit);
+}
+
+// Whether [tmin, tmax] overlaps the box's padded interval; writes the entry distance.
+[[gnu::always_inline]] inline bool slab_test(const SlabRay& r, const float lo[3], const float hi[3], float tmin,
+                                             float tmax, float& t_entry) {
+  float t_exit;
+  return clip_to_box(r, lo, hi, tmin, tmax, t_entry, t_exit);
+}
+
+inline bool slab_test(const SlabRay& r, const Aabb& b, float tmin, float tmax, float& t_entry) {
+  return slab_test(r, b.lo.data(), b.hi.data(), tmin, tmax, t_entry);
 }
 
 }  // namespace raylab

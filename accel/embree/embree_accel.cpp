@@ -10,7 +10,6 @@
 #include <atomic>
 #include <cfloat>
 #include <cmath>
-#include <chrono>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -54,9 +53,7 @@ class EmbreeAccel final : public Accelerator {
     if (device_) rtcReleaseDevice(device_);
   }
 
-  BuildStats build(const TriangleMesh& mesh) override {
-    mesh.validate();
-    const auto t0 = std::chrono::steady_clock::now();
+  BuildStats build_impl(const TriangleMesh& mesh) override {
     // Embree reads vertex buffers with 16-byte loads: pad the last vertex by one float.
     vertices_.assign(mesh.vertices.size() * 3 + 1, 0.0f);
     if (!mesh.vertices.empty()) std::memcpy(vertices_.data(), mesh.vertices.data(), mesh.vertices.size() * sizeof(Vec3f));
@@ -82,10 +79,8 @@ class EmbreeAccel final : public Accelerator {
     }
     rtcCommitScene(scene_);
     check("rtcCommitScene");
-    const auto t1 = std::chrono::steady_clock::now();
 
     BuildStats stats;
-    stats.build_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     stats.bytes = static_cast<size_t>(std::max<int64_t>(0, bytes_.load())) + vertices_.size() * sizeof(float);
     stats.extra["robust"] = robust_ ? 1.0 : 0.0;
     return stats;
@@ -99,7 +94,7 @@ class EmbreeAccel final : public Accelerator {
       const Ray& r = rays[i];
       Hit& h = hits[i];
       h = Hit{};
-      if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
+      if (!ray_is_valid(r)) continue;
       RTCRayHit rh;
       const RayMap map = fill_ray(r, rh.ray);
       if (!map.ok) continue;
@@ -125,7 +120,7 @@ class EmbreeAccel final : public Accelerator {
     for (size_t i = 0; i < rays.size(); ++i) {
       const Ray& r = rays[i];
       occ[i] = 0;
-      if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
+      if (!ray_is_valid(r)) continue;
       RTCRay ray;
       if (!fill_ray(r, ray).ok) continue;
       rtcOccluded1(scene_, &ctx, &ray);
@@ -232,7 +227,7 @@ class EmbreeAccel final : public Accelerator {
 }  // namespace
 
 AcceleratorInfo embree_accelerator_info() {
-  return AcceleratorInfo{
+  AcceleratorInfo info{
       "embree",
       "Embree 3 reference (rtcIntersect1/rtcOccluded1 per ray)",
       {{"quality", "medium", "build quality: low, medium (Embree's default) or high"},
@@ -245,11 +240,18 @@ AcceleratorInfo embree_accelerator_info() {
                                                       : RTC_BUILD_QUALITY_MEDIUM;
         return std::make_unique<EmbreeAccel>(quality, p.boolean("robust"), p.boolean("compact"));
       }};
+  info.caps.robust_variant = "robust=1";
+  info.caps.per_ray_counters = false;  // Embree exposes no per-ray counters
+  info.caps.reference = true;
+  info.cover = {"embree:robust=1"};
+  info.describe = embree_description;
+  info.stats = {{"robust", "1 when built with RTC_SCENE_FLAG_ROBUST"}};
+  return info;
 }
 
-std::string embree_version_string() {
+Description embree_description() {
   RTCDevice dev = rtcNewDevice(nullptr);
-  if (!dev) return "embree (no device)";
+  if (!dev) return {{"version", "unknown"}, {"isa", "unknown"}};
   const ssize_t version = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION);
   std::string isa = "unknown ISA";
   // Embree reports which traversal kernels it compiled in; the widest one that
@@ -260,7 +262,7 @@ std::string embree_version_string() {
   if (native16) isa = "AVX512";
   else if (native8) isa = "AVX2";
   else isa = "SSE";
-  return fmt::format("{}.{}.{} {}", version / 10000, (version / 100) % 100, version % 100, isa);
+  return {{"version", fmt::format("{}.{}.{}", version / 10000, (version / 100) % 100, version % 100)}, {"isa", isa}};
 }
 
 }  // namespace raylab

@@ -6,7 +6,8 @@ namespace raylab {
 
 AcceleratorInfo embree_accelerator_info();
 
-// Version and the ISA Embree selected on this machine (e.g. "3.13.5 AVX512").
-std::string embree_version_string();
+// Version and the ISA Embree selected on this machine ({"version", "3.13.5"},
+// {"isa", "AVX512"}): the registry's description hook.
+Description embree_description();
 
 }  // namespace raylab

@@ -11,6 +11,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "accel/grid/cell_overlap.h"
+#include "accel/grid/grid_build_start.h"
 #include "accel/grid/grid_stats.h"
 
 namespace raylab {
@@ -28,7 +29,7 @@ struct KeyRef {
 // Pass 1 and 2: per-triangle cell counts, then their exclusive prefix sum
 // (first[i] = first pair of triangle i; first[n] = total). Returns false as
 // soon as the total exceeds `limit` (the threads stop counting).
-bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const GridTriangle> tris, uint64_t limit,
+bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle> tris, uint64_t limit,
                  std::vector<uint64_t>& first) {
   const size_t n = tris.size();
   first.assign(n + 1, 0);
@@ -67,22 +68,16 @@ bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const GridTriangle
 
 HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   HashGrid g;
-  const size_t n = mesh.num_triangles();
-  g.tris = copy_grid_triangles(mesh);
-  g.empty = n == 0;
-  if (g.empty) return g;
-
-  const Aabb bounds = mesh.bounds();
-  Vec3d lo, hi;
-  padded_grid_box(bounds, lo, hi);
-  const Vec3d extent = (bounds.hi - bounds.lo).cast<double>();
+  GridBuildStart start;
+  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
+  const size_t n = start.triangles;
+  const Vec3d &lo = start.lo, &hi = start.hi;
   // Empty cells cost no memory, but walking and assigning them costs time:
   // the cells are capped at 8 per byte of budget (2^33 for the default
   // 1 GiB), far above any density the rule asks for in practice.
-  const uint64_t budget = opt.budget_bytes();
+  const uint64_t budget = start.budget;
   const uint64_t max_cells = std::max<uint64_t>(1, budget * 8);
-  ChosenResolution chosen = opt.res ? cap_resolution(*opt.res, max_cells)
-                                    : choose_resolution(extent, static_cast<double>(n), opt.density, max_cells);
+  ChosenResolution chosen = start.first_resolution(opt, max_cells);
   // The build's peak: the (key, id) pairs, the references and the table
   // (32 bytes per occupied cell) must fit the budget.
   const uint64_t max_refs = std::min<uint64_t>(budget / (sizeof(KeyRef) + sizeof(uint32_t)), UINT32_MAX);
@@ -117,9 +112,7 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
     if (total_cells(chosen.res) == 1)
       throw std::runtime_error(fmt::format(
           "hashgrid: a memory budget of {} MiB cannot hold the references of {} triangles", opt.budget_mib, n));
-    const ChosenResolution smaller =
-        opt.res ? cap_resolution(chosen.res, total_cells(chosen.res) / 2)
-                : choose_resolution(extent, static_cast<double>(n), chosen.lambda / 2, max_cells);
+    const ChosenResolution smaller = start.smaller_resolution(opt, chosen, max_cells);
     chosen.res = smaller.res;
     chosen.lambda = smaller.lambda;
     chosen.capped = true;
@@ -160,7 +153,7 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
   stats.extra["hash_max_probes"] = probe_max;
   stats.max_depth = 1;
   stats.avg_depth = 1.0;
-  stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(GridTriangle) +
+  stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle) +
                 sizeof(HashGrid);
   return g;
 }

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/grid/cell_lists.h"
+#include "accel/grid/grid_build_start.h"
 #include "accel/grid/grid_stats.h"
 
 namespace raylab {
@@ -37,7 +38,7 @@ struct SubGridPlan {
 // Splits the top cell's triangles into large and small, and boxes the small
 // ones: their bounds clipped to the cell (enlarged by the top grid's
 // assignment margin, as the assignment was), then padded like a grid box.
-void plan_box(const DdaGrid& top, std::span<const GridTriangle> tris, std::span<const uint32_t> ids,
+void plan_box(const DdaGrid& top, std::span<const LeafTriangle> tris, std::span<const uint32_t> ids,
               SubGridPlan& p) {
   const int64_t cell = p.top_cell;
   const int64_t c[3] = {cell % top.res[0], (cell / top.res[0]) % top.res[1],
@@ -51,7 +52,7 @@ void plan_box(const DdaGrid& top, std::span<const GridTriangle> tris, std::span<
   Vec3d blo = Vec3d::Constant(std::numeric_limits<double>::infinity());
   Vec3d bhi = -blo;
   for (const uint32_t id : ids) {
-    const GridTriangle& t = tris[id];
+    const LeafTriangle& t = tris[id];
     Vec3d tlo = t.p0.cast<double>().cwiseMin(t.p1.cast<double>()).cwiseMin(t.p2.cast<double>());
     Vec3d thi = t.p0.cast<double>().cwiseMax(t.p1.cast<double>()).cwiseMax(t.p2.cast<double>());
     tlo = tlo.cwiseMax(cell_lo);
@@ -88,11 +89,11 @@ void set_resolution(SubGridPlan& p, const GridRes& res) {
 
 // Cells covered by the triangles' bounding boxes (an upper bound of the
 // references the sub-grid will hold).
-double bbox_refs(const SubGridPlan& p, std::span<const GridTriangle> tris) {
+double bbox_refs(const SubGridPlan& p, std::span<const LeafTriangle> tris) {
   const DdaGrid g = p.content.dda();
   double sum = 0.0;
   for (const uint32_t id : p.small) {
-    const GridTriangle& t = tris[id];
+    const LeafTriangle& t = tris[id];
     double cells = 1.0;
     for (int a = 0; a < 3; ++a) {
       const int32_t lo = g.coord(a, std::min({t.p0[a], t.p1[a], t.p2[a]}));
@@ -106,7 +107,7 @@ double bbox_refs(const SubGridPlan& p, std::span<const GridTriangle> tris) {
 
 // The n^(1/3) rule for the top cell's triangles, coarsened when they are
 // large compared with the cells.
-void size_subgrid(SubGridPlan& p, double lambda, std::span<const GridTriangle> tris) {
+void size_subgrid(SubGridPlan& p, double lambda, std::span<const LeafTriangle> tris) {
   if (p.small.empty()) return;  // no sub-grid: res stays 0
   const double n = static_cast<double>(p.small.size());
   const double limit = kMaxBboxRefsPerTriangle * std::max(1.0, lambda) * n;
@@ -124,40 +125,31 @@ std::runtime_error budget_error(const GridOptions& opt, size_t n) {
 
 }  // namespace
 
-TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
-  TwoLevelGrid g;
-  const size_t n = mesh.num_triangles();
-  g.tris = copy_grid_triangles(mesh);
-  g.empty = n == 0;
-  if (g.empty) return g;
+namespace {
 
-  const Aabb bounds = mesh.bounds();
-  Vec3d lo, hi;
-  padded_grid_box(bounds, lo, hi);
-  const Vec3d extent = (bounds.hi - bounds.lo).cast<double>();
-  const uint64_t budget = opt.budget_bytes();
+// The top level: a coarse grid and its cell lists (they live only during the
+// build). The top cells (4 bytes each) get at most 1/8 of the budget, the
+// top-level references at most half; the density halves until they fit.
+ChosenResolution build_top_level(const GridBuildStart& start, const GridOptions& opt, TwoLevelGrid& g,
+                                 CellLists& top_lists) {
+  const size_t n = start.triangles;
   std::vector<uint32_t> all_ids(n);
   std::iota(all_ids.begin(), all_ids.end(), 0u);
-
-  // Budget: the top cells (4 bytes each) get at most 1/8 of it; the top
-  // level's references, which live only during the build, at most half;
-  // the final structure (top cells, sub-grid records, sub-grid cells and
-  // references) all of it.
-  const uint64_t top_cell_limit = std::max<uint64_t>(1, budget / 8 / sizeof(uint32_t));
-  const uint64_t top_ref_limit = budget / 2 / sizeof(uint32_t);
-  ChosenResolution top = choose_resolution(extent, static_cast<double>(n), opt.top_density, top_cell_limit);
-  CellLists top_lists;
+  const uint64_t top_cell_limit = std::max<uint64_t>(1, start.budget / 8 / sizeof(uint32_t));
+  const uint64_t top_ref_limit = start.budget / 2 / sizeof(uint32_t);
+  ChosenResolution top = choose_resolution(start.extent, static_cast<double>(n), opt.top_density, top_cell_limit);
   while (true) {
-    g.top = make_dda_grid(lo, hi, top.res);
-    if (build_cell_lists(g.top, opt.assign, g.tris, all_ids, top_ref_limit, top_lists)) break;
+    g.top = make_dda_grid(start.lo, start.hi, top.res);
+    if (build_cell_lists(g.top, opt.assign, g.tris, all_ids, top_ref_limit, top_lists)) return top;
     if (total_cells(top.res) == 1) throw budget_error(opt, n);
-    top = choose_resolution(extent, static_cast<double>(n), top.lambda / 2, top_cell_limit);
+    top = choose_resolution(start.extent, static_cast<double>(n), top.lambda / 2, top_cell_limit);
     top.capped = true;
   }
-  std::vector<uint32_t>().swap(all_ids);
+}
 
-  // Per non-empty top cell: its large triangles, and a sub-grid over the
-  // part of the cell its small triangles occupy.
+// Per non-empty top cell: its large triangles, and the box of the part of
+// the cell its small triangles occupy.
+std::vector<SubGridPlan> plan_top_cells(const TwoLevelGrid& g, const CellLists& top_lists) {
   std::vector<SubGridPlan> plans;
   for (uint32_t c = 0; c + 1 < top_lists.offsets.size(); ++c) {
     if (top_lists.offsets[c + 1] == top_lists.offsets[c]) continue;
@@ -172,15 +164,16 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
       plan_box(g.top, g.tris, ids, plans[k]);
     }
   });
-  uint64_t large_refs = 0;
-  for (const auto& p : plans) large_refs += p.large.size();
+  return plans;
+}
 
-  const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(TopCellContent) +
-                             large_refs * sizeof(uint32_t);
-  if (top_bytes >= budget) throw budget_error(opt, n);
+// Sizes every sub-grid by the density and fills its cell lists; while the
+// final structure (top_bytes already spent) would exceed the budget, the
+// density is lowered. Returns the density used.
+double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, const GridOptions& opt, uint64_t budget,
+                     uint64_t top_bytes, size_t n, std::vector<CellLists>& lists, bool& capped) {
   double lambda = opt.density;
-  bool sub_capped = false;
-  std::vector<CellLists> lists(plans.size());
+  lists.assign(plans.size(), CellLists{});
   while (true) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) size_subgrid(plans[k], lambda, g.tris);
@@ -193,7 +186,7 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
       // Cells alone exceed the budget: scale the density by the excess.
       if (lambda < 1e-9) throw budget_error(opt, n);
       lambda *= std::min(0.5, static_cast<double>(budget - top_bytes) / static_cast<double>(sub_offsets * sizeof(uint32_t)));
-      sub_capped = true;
+      capped = true;
       continue;
     }
     const uint64_t ref_limit = (budget - fixed) / sizeof(uint32_t);
@@ -208,21 +201,19 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
           over = true;
       }
     });
-    if (!over) break;
+    if (!over) return lambda;
     if (lambda < 1e-9) throw budget_error(opt, n);
     lambda /= 2;
-    sub_capped = true;
+    capped = true;
     for (auto& l : lists) l = CellLists{};
   }
-  if (top.capped || sub_capped) {
-    warn_budget_capped("grid2", fmt::format("top={}, density={}", opt.top_density, opt.density),
-                       fmt::format("top={:.4g} (res={}), density={:.4g}", top.lambda, format_grid_resolution(top.res), lambda),
-                       opt.budget_mib);
-  }
+}
 
-  // Concatenate: top cell k's large triangles, then its sub-grid's
-  // references, in the one refs array; the sub-grid's offsets start at its
-  // base in the one offsets array and point into refs.
+// Concatenates: top cell k's large triangles, then its sub-grid's
+// references, in the one refs array; the sub-grid's offsets start at its
+// base in the one offsets array and point into refs.
+void concatenate_levels(const ChosenResolution& top, const std::vector<SubGridPlan>& plans,
+                        std::vector<CellLists>& lists, TwoLevelGrid& g) {
   g.top_cells.assign(total_cells(top.res), kEmptyTopCell);
   g.contents.resize(plans.size());
   uint64_t offsets_total = 0, refs_total = 0;
@@ -253,9 +244,12 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
       lists[k] = CellLists{};
     }
   });
+}
 
-  // Statistics: cells of both levels; occupancy of the second level, where
-  // the triangles are.
+// Statistics: cells of both levels; occupancy of the second level, where
+// the triangles are.
+void add_two_level_stats(const TwoLevelGrid& g, const ChosenResolution& top, size_t top_refs, uint64_t large_refs,
+                         double lambda, bool capped, const GridOptions& opt, size_t n, BuildStats& stats) {
   uint64_t sub_cells = 0, nonempty = 0;
   uint32_t max_per_cell = 0;
   uint64_t subgrids = 0;
@@ -268,25 +262,54 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
     nonempty += occ.nonempty;
     max_per_cell = std::max(max_per_cell, occ.max_per_cell);
   }
-  add_occupancy_stats(stats, total_cells(top.res) + sub_cells, nonempty, refs_total, max_per_cell, n);
+  add_occupancy_stats(stats, total_cells(top.res) + sub_cells, nonempty, g.refs.size(), max_per_cell, n);
   stats.extra["empty_fraction"] = sub_cells ? 1.0 - static_cast<double>(nonempty) / static_cast<double>(sub_cells) : 0.0;
   stats.extra["top_cells"] = static_cast<double>(total_cells(top.res));
   stats.extra["top_res_x"] = top.res[0];
   stats.extra["top_res_y"] = top.res[1];
   stats.extra["top_res_z"] = top.res[2];
   stats.extra["top_lambda"] = top.lambda;
-  stats.extra["top_refs_per_triangle"] = static_cast<double>(top_lists.refs.size()) / static_cast<double>(n);
+  stats.extra["top_refs_per_triangle"] = static_cast<double>(top_refs) / static_cast<double>(n);
   stats.extra["subgrids"] = static_cast<double>(subgrids);
   stats.extra["large_refs"] = static_cast<double>(large_refs);
   stats.extra["sub_cells"] = static_cast<double>(sub_cells);
   stats.extra["lambda"] = lambda;
   stats.extra["lambda_requested"] = opt.density;
-  stats.extra["budget_capped"] = (top.capped || sub_capped) ? 1.0 : 0.0;
+  stats.extra["budget_capped"] = capped ? 1.0 : 0.0;
   stats.max_depth = 2;
   stats.avg_depth = 2.0;
   stats.bytes = g.top_cells.capacity() * sizeof(uint32_t) + g.contents.capacity() * sizeof(TopCellContent) +
                 (g.offsets.capacity() + g.refs.capacity()) * sizeof(uint32_t) +
-                g.tris.capacity() * sizeof(GridTriangle) + sizeof(TwoLevelGrid);
+                g.tris.capacity() * sizeof(LeafTriangle) + sizeof(TwoLevelGrid);
+}
+
+}  // namespace
+
+// The final structure (top cells, sub-grid records, sub-grid cells and
+// references) must fit the whole budget.
+TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
+  TwoLevelGrid g;
+  GridBuildStart start;
+  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
+  const size_t n = start.triangles;
+  CellLists top_lists;
+  const ChosenResolution top = build_top_level(start, opt, g, top_lists);
+  std::vector<SubGridPlan> plans = plan_top_cells(g, top_lists);
+  uint64_t large_refs = 0;
+  for (const auto& p : plans) large_refs += p.large.size();
+  const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(TopCellContent) +
+                             large_refs * sizeof(uint32_t);
+  if (top_bytes >= start.budget) throw budget_error(opt, n);
+  bool sub_capped = false;
+  std::vector<CellLists> lists;
+  const double lambda = fill_subgrids(plans, g, opt, start.budget, top_bytes, n, lists, sub_capped);
+  if (top.capped || sub_capped) {
+    warn_budget_capped("grid2", fmt::format("top={}, density={}", opt.top_density, opt.density),
+                       fmt::format("top={:.4g} (res={}), density={:.4g}", top.lambda, format_grid_resolution(top.res), lambda),
+                       opt.budget_mib);
+  }
+  concatenate_levels(top, plans, lists, g);
+  add_two_level_stats(g, top, top_lists.refs.size(), large_refs, lambda, top.capped || sub_capped, opt, n, stats);
   return g;
 }
 

@@ -5,28 +5,23 @@
 
 #include <fmt/format.h>
 
+#include "accel/grid/grid_build_start.h"
 #include "accel/grid/grid_stats.h"
 
 namespace raylab {
 
 UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   UniformGrid g;
-  const size_t n = mesh.num_triangles();
-  g.tris = copy_grid_triangles(mesh);
-  g.empty = n == 0;
-  if (g.empty) return g;
-
-  const Aabb bounds = mesh.bounds();
-  Vec3d lo, hi;
-  padded_grid_box(bounds, lo, hi);
-  const Vec3d extent = (bounds.hi - bounds.lo).cast<double>();
+  GridBuildStart start;
+  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
+  const size_t n = start.triangles;
+  const Vec3d &lo = start.lo, &hi = start.hi;
 
   // Cells (one 4-byte offset each) may take half of the budget; the
   // references must fit in what the offsets leave.
-  const uint64_t budget = opt.budget_bytes();
+  const uint64_t budget = start.budget;
   const uint64_t max_cells = std::max<uint64_t>(1, budget / 2 / sizeof(uint32_t) - 1);
-  ChosenResolution chosen = opt.res ? cap_resolution(*opt.res, max_cells)
-                                    : choose_resolution(extent, static_cast<double>(n), opt.density, max_cells);
+  ChosenResolution chosen = start.first_resolution(opt, max_cells);
 
   std::vector<uint32_t> ids(n);
   std::iota(ids.begin(), ids.end(), 0u);
@@ -39,8 +34,7 @@ UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt,
       throw std::runtime_error(fmt::format("grid: a memory budget of {} MiB cannot hold the references of {} triangles",
                                            opt.budget_mib, n));
     // Too many references: halve the cells and try again.
-    const ChosenResolution smaller = opt.res ? cap_resolution(chosen.res, total_cells(chosen.res) / 2)
-                                             : choose_resolution(extent, static_cast<double>(n), chosen.lambda / 2, max_cells);
+    const ChosenResolution smaller = start.smaller_resolution(opt, chosen, max_cells);
     chosen.res = smaller.res;
     chosen.lambda = smaller.lambda;
     chosen.capped = true;
@@ -58,7 +52,7 @@ UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt,
   stats.extra["budget_capped"] = chosen.capped ? 1.0 : 0.0;
   stats.max_depth = 1;
   stats.avg_depth = 1.0;
-  stats.bytes = g.lists.bytes() + g.tris.capacity() * sizeof(GridTriangle) + sizeof(UniformGrid);
+  stats.bytes = g.lists.bytes() + g.tris.capacity() * sizeof(LeafTriangle) + sizeof(UniformGrid);
   return g;
 }
 

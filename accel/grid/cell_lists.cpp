@@ -44,7 +44,7 @@ void exclusive_scan(std::vector<uint32_t>& v) {
 
 }  // namespace
 
-bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const GridTriangle> tris,
+bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle> tris,
                       std::span<const uint32_t> ids, uint64_t max_refs, CellLists& out) {
   out = CellLists{};
   const size_t cells = g.cells();
@@ -60,7 +60,7 @@ bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const GridTri
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
     uint64_t local = 0;
     for (size_t i = r.begin(); i < r.end() && !over.load(std::memory_order_relaxed); ++i) {
-      const GridTriangle& t = tris[ids[i]];
+      const LeafTriangle& t = tris[ids[i]];
       for_each_assigned_cell(g, mode, t.p0, t.p1, t.p2, [&](int32_t x, int32_t y, int32_t z) {
         std::atomic_ref<uint32_t>(counts[g.index(x, y, z)]).fetch_add(1, std::memory_order_relaxed);
         if (++local < kPublish) return true;
@@ -83,7 +83,7 @@ bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const GridTri
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const uint32_t id = ids[i];
-      const GridTriangle& t = tris[id];
+      const LeafTriangle& t = tris[id];
       for_each_assigned_cell(g, mode, t.p0, t.p1, t.p2, [&](int32_t x, int32_t y, int32_t z) {
         const uint32_t slot =
             std::atomic_ref<uint32_t>(cursor[g.index(x, y, z)]).fetch_add(1, std::memory_order_relaxed);

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "accel/grid/cell_overlap.h"
-#include "accel/grid/grid_triangles.h"
+#include "accel/core/leaf_triangle.h"
 
 namespace raylab {
 
@@ -28,7 +28,7 @@ struct CellLists {
 // Assigns the triangles `ids` (indices into `tris`) to the cells of `g`.
 // Returns false, leaving `out` empty, when the references would exceed
 // `max_refs` (checked after the count pass, before the fill allocates).
-bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const GridTriangle> tris,
+bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle> tris,
                       std::span<const uint32_t> ids, uint64_t max_refs, CellLists& out);
 
 // Figures about a cell list (cells, non-empty cells, references).

@@ -15,7 +15,7 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "accel/core/aabb.h"
+#include "base/aabb.h"
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/tri_box_overlap.h"
 

@@ -22,7 +22,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/core/ray.h"
+#include "base/ray.h"
 #include "accel/grid/dda_grid.h"
 
 namespace raylab {

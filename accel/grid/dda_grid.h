@@ -13,7 +13,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "accel/core/aabb.h"
+#include "base/aabb.h"
 #include "accel/grid/grid_resolution.h"
 
 namespace raylab {

@@ -1,5 +1,7 @@
 #include "accel/grid/grid_options.h"
 
+#include "accel/core/triangle_test_param.h"
+
 #include <cmath>
 #include <cstdio>
 
@@ -15,7 +17,7 @@ std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top) {
   if (with_res) p.push_back({"res", "auto", "explicit resolution AxBxC (overrides density)"});
   p.push_back({"budget", "1024", "memory budget in MiB; exceeding it lowers density (warning)"});
   p.push_back({"assign", "exact", "triangle-to-cell assignment: exact (SAT, Akenine-Moller 2001) or bbox"});
-  p.push_back({"tri", "watertight", "triangle test: watertight (Woop et al. 2013) or mt (Moller-Trumbore)"});
+  p.push_back(triangle_test_param());
   return p;
 }
 
@@ -34,7 +36,7 @@ GridOptions parse_grid_options(const std::string& owner, const Params& p, bool w
   if (!(o.budget_mib > 0.0 && o.budget_mib <= 1024.0 * 1024.0))
     throw SpecError(fmt::format("{}: budget must be in (0, 1048576] MiB, got {}", owner, p.str("budget")));
   o.assign = p.choice("assign", {"exact", "bbox"}) == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
-  o.test = p.choice("tri", {"watertight", "mt"}) == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight;
+  o.test = parse_triangle_test(p);
   return o;
 }
 
@@ -42,6 +44,39 @@ void warn_budget_capped(const std::string& owner, const std::string& requested, 
                         double budget_mib) {
   std::fprintf(stderr, "%s", fmt::format("raylab: warning: {}: {} exceeds the memory budget of {} MiB; using {}\n",
                                          owner, requested, budget_mib, used).c_str());
+}
+
+void complete_grid_info(AcceleratorInfo& info) {
+  const bool two_level = info.name == "grid2";
+  info.caps.mt_variant = "tri=mt";
+  info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox"};
+  info.stats = {{"cells", two_level ? "sub-grid cells" : "cells"},
+                {"nonempty_cells", "cells holding at least one triangle"},
+                {"empty_fraction", "fraction of empty cells"},
+                {"refs", "triangle references in cells"},
+                {"refs_per_triangle", "references per triangle"},
+                {"mean_tris_per_nonempty_cell", "mean references per non-empty cell"},
+                {"max_tris_per_cell", "largest cell, in references"},
+                {"lambda", "density used (after the memory cap)"},
+                {"lambda_requested", "density asked for"},
+                {"budget_capped", "1 when the memory budget lowered the density"}};
+  if (!two_level)
+    info.stats.insert(info.stats.end(), {{"res_x", "cells along x"}, {"res_y", "cells along y"}, {"res_z", "cells along z"}});
+  if (info.name == "hashgrid")
+    info.stats.insert(info.stats.end(), {{"hash_capacity", "hash table slots"},
+                                         {"hash_load", "occupied slots over capacity"},
+                                         {"hash_mean_probes", "mean probes to find a stored cell"},
+                                         {"hash_max_probes", "longest probe sequence"}});
+  if (two_level)
+    info.stats.insert(info.stats.end(), {{"top_cells", "top-level cells"},
+                                         {"top_res_x", "top cells along x"},
+                                         {"top_res_y", "top cells along y"},
+                                         {"top_res_z", "top cells along z"},
+                                         {"top_lambda", "density of the top grid"},
+                                         {"top_refs_per_triangle", "top-level references per triangle"},
+                                         {"subgrids", "top cells with a sub-grid"},
+                                         {"large_refs", "references kept at the top level (large triangles)"},
+                                         {"sub_cells", "cells of all sub-grids"}});
 }
 
 }  // namespace raylab

@@ -14,7 +14,8 @@
 #include "accel/core/intersect_triangle.h"
 #include "accel/grid/cell_overlap.h"
 #include "accel/grid/grid_resolution.h"
-#include "accel/spec.h"
+#include "accel/registry.h"
+#include "base/spec.h"
 
 namespace raylab {
 
@@ -34,6 +35,10 @@ std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top);
 
 // Reads and checks the parameters; throws SpecError naming the bad one.
 GridOptions parse_grid_options(const std::string& owner, const Params& p, bool with_res, bool with_top);
+
+// The registry entries shared by the grids (capabilities, specs to cover,
+// statistic keys) for `name`: "grid", "hashgrid" or "grid2".
+void complete_grid_info(AcceleratorInfo& info);
 
 // The one warning printed when a budget lowers the requested density.
 void warn_budget_capped(const std::string& owner, const std::string& requested, const std::string& used,

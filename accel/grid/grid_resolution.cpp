@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "accel/spec.h"
+#include "base/spec.h"
 
 namespace raylab {
 

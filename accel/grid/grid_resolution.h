@@ -19,7 +19,7 @@
 #include <cstdint>
 #include <string>
 
-#include "accel/core/vec.h"
+#include "base/vec.h"
 
 namespace raylab {
 

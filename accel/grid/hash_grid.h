@@ -15,7 +15,7 @@
 #include "accel/grid/cell_hash_table.h"
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
-#include "accel/grid/grid_triangles.h"
+#include "accel/core/leaf_triangle.h"
 
 namespace raylab {
 
@@ -23,7 +23,7 @@ struct HashGrid {
   DdaGrid dda;
   CellHashTable table;
   std::vector<uint32_t> refs;  // triangle ids, grouped by occupied cell
-  std::vector<GridTriangle> tris;
+  std::vector<LeafTriangle> tris;
   bool empty = true;
 };
 

@@ -10,7 +10,7 @@
 // is exact, so answers never depend on the mailbox).
 #include <cstdint>
 
-#include "accel/core/hit.h"
+#include "base/hit.h"
 
 namespace raylab {
 

@@ -10,7 +10,6 @@
 // cell once its sub-grid is done.
 #include <cstdint>
 
-#include "accel/grid/dda.h"
 #include "accel/grid/grid_ray_query.h"
 #include "accel/grid/two_level_grid.h"
 
@@ -22,48 +21,42 @@ struct TwoLevelGridView {
   const TopCellContent* contents = nullptr;
   const uint32_t* offsets = nullptr;
   const uint32_t* refs = nullptr;
-  const GridTriangle* tris = nullptr;
+  const LeafTriangle* tris = nullptr;
   bool empty = true;
 };
 
+inline TwoLevelGridView grid_view(const TwoLevelGrid& g) {
+  return TwoLevelGridView{g.top,           g.top_cells.data(), g.contents.data(), g.offsets.data(),
+                          g.refs.data(),   g.tris.data(),      g.empty};
+}
+
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
-  if constexpr (kCount) stats->rays++;
-  if (g.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return Hit{};
-  const DdaRay dr(ray);
-  double t0 = ray.tmin, t1 = ray.tmax;
-  if (!dda_clip(dr, g.top.lo, g.top.hi, t0, t1)) return Hit{};
-  GridRayQuery<kTest> q(ray);
-  dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) {
-    if constexpr (kCount) stats->nodes_visited++;
-    const uint32_t k = g.top_cells[top_cell];
-    if (k == kEmptyTopCell) return false;
-    const TopCellContent& content = g.contents[k];
-    if (content.large_count != 0 &&
-        q.template test_cell<kAnyHit, kCount>(g.refs + content.large_begin, content.large_count, g.tris, stats))
-      return true;
-    if (!content.has_subgrid()) {
+inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
+  return walk_grid<kTest, kAnyHit, kCount>(g.top, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
+    auto& rec = q.rec;
+    dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) {
+      rec.count_nodes(1);
+      const uint32_t k = g.top_cells[top_cell];
+      if (k == kEmptyTopCell) return false;
+      const TopCellContent& content = g.contents[k];
+      if (!content.has_subgrid()) return q.visit_cell(g.refs + content.large_begin, content.large_count, g.tris, t_exit);
+      if (content.large_count != 0 && q.test_cell(g.refs + content.large_begin, content.large_count, g.tris)) return true;
+      const DdaGrid sub_dda = content.dda();
+      double s0 = t_enter, s1 = t_exit < rec.tmax() ? t_exit : static_cast<double>(rec.tmax());
+      if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
+        const uint32_t* offsets = g.offsets + content.offsets_base;
+        const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) {
+          rec.count_nodes(1);
+          const uint32_t begin = offsets[cell], end = offsets[cell + 1];
+          if (begin == end) return false;
+          return q.visit_cell(g.refs + begin, end - begin, g.tris, cell_exit);
+        });
+        if (stop) return true;
+      }
       if constexpr (kAnyHit) return false;
       return q.done_at(t_exit);
-    }
-    const DdaGrid sub_dda = content.dda();
-    double s0 = t_enter, s1 = t_exit < q.tmax ? t_exit : static_cast<double>(q.tmax);
-    if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
-      const uint32_t* offsets = g.offsets + content.offsets_base;
-      const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) {
-        if constexpr (kCount) stats->nodes_visited++;
-        const uint32_t begin = offsets[cell], end = offsets[cell + 1];
-        if (begin == end) return false;
-        if (q.template test_cell<kAnyHit, kCount>(g.refs + begin, end - begin, g.tris, stats)) return true;
-        if constexpr (kAnyHit) return false;
-        return q.done_at(cell_exit);
-      });
-      if (stop) return true;
-    }
-    if constexpr (kAnyHit) return false;
-    return q.done_at(t_exit);
+    });
   });
-  return q.hit;
 }
 
 }  // namespace raylab

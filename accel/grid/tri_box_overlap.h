@@ -11,7 +11,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "accel/core/vec.h"
+#include "base/vec.h"
 
 namespace raylab {
 

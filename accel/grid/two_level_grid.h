@@ -28,7 +28,7 @@
 #include "accel/accelerator.h"
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
-#include "accel/grid/grid_triangles.h"
+#include "accel/core/leaf_triangle.h"
 
 namespace raylab {
 
@@ -56,7 +56,7 @@ struct TwoLevelGrid {
   std::vector<TopCellContent> contents;
   std::vector<uint32_t> offsets;
   std::vector<uint32_t> refs;
-  std::vector<GridTriangle> tris;
+  std::vector<LeafTriangle> tris;
   bool empty = true;
 };
 

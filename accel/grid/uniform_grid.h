@@ -8,14 +8,14 @@
 #include "accel/grid/cell_lists.h"
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
-#include "accel/grid/grid_triangles.h"
+#include "accel/core/leaf_triangle.h"
 
 namespace raylab {
 
 struct UniformGrid {
   DdaGrid dda;
   CellLists lists;
-  std::vector<GridTriangle> tris;
+  std::vector<LeafTriangle> tris;
   bool empty = true;  // no triangles: every ray misses
 };
 

@@ -13,6 +13,7 @@
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
+#include "accel/kdtree/kd_build_start.h"
 #include "accel/kdtree/clip_triangle.h"
 #include "accel/kdtree/kd_tree_writer.h"
 
@@ -108,24 +109,10 @@ class SahEventBuilder {
   SahEventBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
 
   KdTree run() {
+    max_depth_ = kd_build_depth_limit(mesh_, opt_, kTriMask);
     const size_t n = mesh_.num_triangles();
-    if (n > kTriMask) throw std::length_error(fmt::format("kdtree: {} triangles, at most {} supported", n, kTriMask));
-    max_depth_ = opt_.max_depth < 0 ? kd_default_max_depth(n) : std::min(opt_.max_depth, kKdMaxDepthLimit);
-    if (n == 0) {
-      writer_.set_leaf(0, {});
-      return writer_.finish(Aabb::empty());
-    }
-    tri_boxes_.resize(n);
-    const Aabb bounds = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 8192), Aabb(),
-        [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
-          for (size_t i = r.begin(); i < r.end(); ++i) {
-            tri_boxes_[i] = mesh_.triangle_bounds(i);
-            acc.extend(tri_boxes_[i]);
-          }
-          return acc;
-        },
-        [](const Aabb& a, const Aabb& b) { return merge(a, b); });
+    if (n == 0) return empty_kdtree(writer_);
+    const Aabb bounds = kd_triangle_boxes(mesh_, tri_boxes_);
 
     // The root's events come from the triangles' boxes (the root cell holds
     // them all), sorted once; from here on lists are only split and merged.

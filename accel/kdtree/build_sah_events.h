@@ -23,7 +23,7 @@
 // straddling are skipped (a guard of this implementation against reference
 // blow-up in flat cells of overlapping coplanar triangles).
 // Subtrees are built as parallel TBB tasks.
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kdtree_node.h"
 

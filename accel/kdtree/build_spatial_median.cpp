@@ -8,6 +8,7 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
+#include "accel/kdtree/kd_build_start.h"
 #include "accel/kdtree/clip_triangle.h"
 #include "accel/kdtree/kd_tree_writer.h"
 
@@ -28,24 +29,13 @@ class MedianBuilder {
   MedianBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
 
   KdTree run() {
+    max_depth_ = kd_build_depth_limit(mesh_, opt_, kKdMaxIndex);
     const size_t n = mesh_.num_triangles();
-    if (n > kKdMaxIndex) throw std::length_error(fmt::format("kdtree: {} triangles, at most {} supported", n, kKdMaxIndex));
-    max_depth_ = opt_.max_depth < 0 ? kd_default_max_depth(n) : std::min(opt_.max_depth, kKdMaxDepthLimit);
-    if (n == 0) {
-      writer_.set_leaf(0, {});
-      return writer_.finish(Aabb::empty());
-    }
+    if (n == 0) return empty_kdtree(writer_);
+    std::vector<Aabb> boxes;
+    const Aabb bounds = kd_triangle_boxes(mesh_, boxes);
     std::vector<PrimRef> refs(n);
-    const Aabb bounds = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 8192), Aabb(),
-        [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
-          for (size_t i = r.begin(); i < r.end(); ++i) {
-            refs[i] = PrimRef{static_cast<uint32_t>(i), mesh_.triangle_bounds(i)};
-            acc.extend(refs[i].box);
-          }
-          return acc;
-        },
-        [](const Aabb& a, const Aabb& b) { return merge(a, b); });
+    for (size_t i = 0; i < n; ++i) refs[i] = PrimRef{static_cast<uint32_t>(i), boxes[i]};
     build(0, bounds, std::move(refs), 0);
     return writer_.finish(bounds);
   }

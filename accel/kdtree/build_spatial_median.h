@@ -6,7 +6,7 @@
 // half of them straddling the plane (no reference blow-up). Straddling
 // triangles are clipped to the children like the SAH builder's (perfect
 // splits, or boxes with clip=0).
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kdtree_node.h"
 

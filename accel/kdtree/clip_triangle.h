@@ -17,8 +17,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/core/aabb.h"
-#include "accel/core/vec.h"
+#include "base/aabb.h"
+#include "base/vec.h"
 
 namespace raylab {
 

@@ -4,10 +4,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/core/batch_accelerator.h"
+#include "accel/core/triangle_test_param.h"
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
 #include "accel/kdtree/traverse_kdtree.h"
-#include "accel/util/timer.h"
 
 namespace raylab {
 
@@ -15,14 +16,18 @@ namespace {
 
 enum class KdBuilder { Sah, Median };
 
-class KdTreeAccel final : public Accelerator {
+class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
   KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test)
-      : builder_(builder), opt_(opt), test_(test) {}
+      : BatchAccelerator(test), builder_(builder), opt_(opt) {}
 
-  BuildStats build(const TriangleMesh& mesh) override {
-    mesh.validate();
-    Timer timer;
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    return traverse_kdtree<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+
+ protected:
+  BuildStats build_impl(const TriangleMesh& mesh) override {
     KdTree tree = builder_ == KdBuilder::Sah ? build_kdtree_sah(mesh, opt_) : build_kdtree_median(mesh, opt_);
     nodes_ = std::move(tree.nodes);
     // Each referenced triangle is copied once, in the order the leaves first
@@ -30,20 +35,20 @@ class KdTreeAccel final : public Accelerator {
     // into that array. On the bunny (5.3 references per triangle) this was
     // faster than one copy per reference, with half the memory.
     std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
-    tris_.clear();
+    std::vector<uint32_t> first_use;  // triangle ids in the order the leaves first refer to them
     ids_.resize(tree.prim_ids.size());
     for (size_t i = 0; i < tree.prim_ids.size(); ++i) {
       const uint32_t id = tree.prim_ids[i];
       if (slot[id] == UINT32_MAX) {
-        slot[id] = static_cast<uint32_t>(tris_.size());
-        tris_.push_back(KdLeafTriangle{mesh.vertex(id, 0), mesh.vertex(id, 1), mesh.vertex(id, 2), id});
+        slot[id] = static_cast<uint32_t>(first_use.size());
+        first_use.push_back(id);
       }
       ids_[i] = slot[id];
     }
+    tris_ = copy_leaf_triangles(mesh, first_use);
     view_ = KdTreeView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0};
 
     BuildStats s;
-    s.build_ms = timer.ms();
     const KdTreeShape shape = measure_kdtree(tree.bounds, nodes_);
     const double n = static_cast<double>(mesh.num_triangles());
     s.nodes = shape.nodes;
@@ -51,7 +56,7 @@ class KdTreeAccel final : public Accelerator {
     s.max_depth = shape.max_depth;
     s.avg_depth = shape.avg_leaf_depth;
     s.sah_cost = shape.sah_cost;
-    s.bytes = nodes_.size() * sizeof(KdNode) + tris_.size() * sizeof(KdLeafTriangle) + ids_.size() * sizeof(uint32_t);
+    s.bytes = nodes_.size() * sizeof(KdNode) + tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t);
     s.extra["inner_nodes"] = static_cast<double>(shape.inner);
     s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
     s.extra["references"] = static_cast<double>(shape.references);
@@ -64,34 +69,11 @@ class KdTreeAccel final : public Accelerator {
     return s;
   }
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    dispatch_triangle_test(test_, [&]<TriangleTest kTest>() {
-      if (stats) {
-        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_kdtree<kTest, false, true>(view_, rays[i], stats);
-      } else {
-        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_kdtree<kTest, false, false>(view_, rays[i], nullptr);
-      }
-    });
-  }
-
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    dispatch_triangle_test(test_, [&]<TriangleTest kTest>() {
-      if (stats) {
-        for (size_t i = 0; i < rays.size(); ++i)
-          occ[i] = traverse_kdtree<kTest, true, true>(view_, rays[i], stats).valid();
-      } else {
-        for (size_t i = 0; i < rays.size(); ++i)
-          occ[i] = traverse_kdtree<kTest, true, false>(view_, rays[i], nullptr).valid();
-      }
-    });
-  }
-
  private:
   KdBuilder builder_;
   KdBuildOptions opt_;
-  TriangleTest test_;
   std::vector<KdNode> nodes_;
-  std::vector<KdLeafTriangle> tris_;
+  std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
   KdTreeView view_;
 };
@@ -99,7 +81,7 @@ class KdTreeAccel final : public Accelerator {
 }  // namespace
 
 AcceleratorInfo kdtree_accelerator_info() {
-  return AcceleratorInfo{
+  AcceleratorInfo info{
       "kdtree",
       "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal",
       {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)"},
@@ -109,7 +91,7 @@ AcceleratorInfo kdtree_accelerator_info() {
        {"clip", "1", "perfect splits: clip straddling triangles to the cells (0 = bounding boxes)"},
        {"max_depth", "auto", "depth limit: auto = 8 + 1.3 log2 N, or 0..64"},
        {"leaf", "2", "builder=median: cells with at most this many triangles become leaves"},
-       {"tri", "watertight", "triangle test: watertight (Woop et al. 2013) or mt (Moller-Trumbore)"}},
+       triangle_test_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         const KdBuilder builder = p.choice("builder", {"sah", "median"}) == "median" ? KdBuilder::Median : KdBuilder::Sah;
         KdBuildOptions opt;
@@ -136,10 +118,18 @@ AcceleratorInfo kdtree_accelerator_info() {
         }
         opt.median_leaf_size = p.integer("leaf");
         if (opt.median_leaf_size < 1) throw SpecError("kdtree: leaf must be >= 1");
-        const auto& t = p.choice("tri", {"watertight", "mt"});
-        return std::make_unique<KdTreeAccel>(builder, opt,
-                                             t == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight);
+        return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p));
       }};
+  info.caps.mt_variant = "tri=mt";
+  info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt"};
+  info.stats = {{"inner_nodes", "inner nodes"},
+                {"empty_leaves", "leaves without triangles"},
+                {"references", "triangle references in leaves"},
+                {"refs_per_triangle", "references per triangle (perfect splits duplicate straddling triangles)"},
+                {"max_leaf_size", "largest leaf, in triangles"},
+                {"avg_leaf_size", "mean references per non-empty leaf"},
+                {"max_depth_limit", "the depth limit in force (auto: 8 + 1.3 log2 N)"}};
+  return info;
 }
 
 }  // namespace raylab

@@ -17,7 +17,7 @@
 #include <span>
 #include <vector>
 
-#include "accel/core/aabb.h"
+#include "base/aabb.h"
 
 namespace raylab {
 

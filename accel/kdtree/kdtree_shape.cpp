@@ -1,5 +1,6 @@
 #include <algorithm>
 
+#include "accel/core/sah_report.h"
 #include "accel/kdtree/kdtree_node.h"
 
 namespace raylab {
@@ -14,7 +15,7 @@ KdTreeShape measure_kdtree(const Aabb& bounds, std::span<const KdNode> nodes) {
     Aabb cell;
   };
   std::vector<Item> stack{{0, 0, bounds}};
-  double depth_sum = 0.0, cost = 0.0;
+  SahTally tally;
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
@@ -27,11 +28,10 @@ KdTreeShape measure_kdtree(const Aabb& bounds, std::span<const KdNode> nodes) {
       if (n.count() == 0) s.empty_leaves++;
       s.references += n.count();
       s.max_leaf_size = std::max<size_t>(s.max_leaf_size, n.count());
-      depth_sum += it.depth;
-      cost += area * n.count();  // C_i = 1
+      tally.leaf(area, n.count(), it.depth);
     } else {
       s.inner++;
-      cost += area;  // C_t = 1
+      tally.inner(area);
       Aabb below = it.cell, above = it.cell;
       below.hi[n.axis()] = n.split();
       above.lo[n.axis()] = n.split();
@@ -39,8 +39,8 @@ KdTreeShape measure_kdtree(const Aabb& bounds, std::span<const KdNode> nodes) {
       stack.push_back({n.child() + 1, it.depth + 1, above});
     }
   }
-  s.avg_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
-  s.sah_cost = root_area > 0.0 ? cost / root_area : 0.0;
+  s.avg_leaf_depth = tally.avg_leaf_depth();
+  s.sah_cost = tally.sah_cost(root_area);
   return s;
 }
 

@@ -45,22 +45,15 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/accelerator.h"
-#include "accel/core/intersect_triangle.h"
+#include "accel/core/hit_recorder.h"
+#include "accel/core/leaf_triangle.h"
 #include "accel/kdtree/kdtree_node.h"
 
 namespace raylab {
 
-// Triangle vertices copied next to their original ids (once per triangle, in
-// the order the leaves first refer to them).
-struct KdLeafTriangle {
-  Vec3f p0, p1, p2;
-  uint32_t prim;
-};
-
 struct KdTreeView {
   const KdNode* nodes = nullptr;
-  const KdLeafTriangle* tris = nullptr;
+  const LeafTriangle* tris = nullptr;  // once per triangle, in the order the leaves first refer to them
   const uint32_t* ids = nullptr;  // leaf ranges [offset, offset + count) of indices into tris
   Aabb bounds;
   bool empty = true;
@@ -69,12 +62,18 @@ struct KdTreeView {
 // The margin delta as a fraction of M (8 ulps of M).
 inline constexpr float kKdMarginScale = 0x1p-20f;
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
-  Hit hit;
-  if constexpr (kCount) stats->rays++;
-  if (tree.empty || !ray_is_valid(ray) || !(ray.tmin <= ray.tmax)) return hit;
+// Per-ray constants of the walk: reciprocals, the plane margins and the
+// distance margin, and [t0, t1] = the ray's (widened) interval clipped to the
+// inflated root cell.
+struct KdRay {
+  float inv[3], margin[3];
+  uint32_t neg[3];
+  float delta_t;
+  float t0, t1;
+};
 
+// Fills `kr`; false when the ray misses the inflated root cell.
+[[gnu::always_inline]] inline bool kd_enter_root(const KdTreeView& tree, const Ray& ray, KdRay& kr) {
   const Vec3f& org = ray.org;
   float m = 0.0f, dir_max = 0.0f;
   for (int k = 0; k < 3; ++k) {
@@ -82,35 +81,48 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
     dir_max = std::max(dir_max, std::fabs(ray.dir[k]));
   }
   const float delta = std::max(kKdMarginScale * m, std::numeric_limits<float>::min());
-  const float delta_t = delta / dir_max;
+  kr.delta_t = delta / dir_max;
 
   // Exact IEEE reciprocals: +-0 gives +-inf (parallel rays); a denormal
   // component whose reciprocal overflows gets NaN, so every plane along that
   // axis visits both children. margin[k] moves a plane towards the far side.
-  float inv[3], margin[3];
-  uint32_t neg[3];
   for (int k = 0; k < 3; ++k) {
     const float d = ray.dir[k];
-    inv[k] = 1.0f / d;
-    if (d != 0.0f && std::isinf(inv[k])) inv[k] = std::numeric_limits<float>::quiet_NaN();
-    neg[k] = std::signbit(d) ? 1u : 0u;
-    margin[k] = neg[k] ? -delta : delta;
+    kr.inv[k] = 1.0f / d;
+    if (d != 0.0f && std::isinf(kr.inv[k])) kr.inv[k] = std::numeric_limits<float>::quiet_NaN();
+    kr.neg[k] = std::signbit(d) ? 1u : 0u;
+    kr.margin[k] = kr.neg[k] ? -delta : delta;
   }
 
   // Clip [tmin, tmax] (widened) to the inflated root cell.
-  float t0 = ray.tmin - delta_t, t1 = ray.tmax + delta_t;
+  float t0 = ray.tmin - kr.delta_t, t1 = ray.tmax + kr.delta_t;
   for (int k = 0; k < 3; ++k) {
-    const float near_plane = neg[k] ? tree.bounds.hi[k] : tree.bounds.lo[k];
-    const float far_plane = neg[k] ? tree.bounds.lo[k] : tree.bounds.hi[k];
-    const float tn = ((near_plane - org[k]) - margin[k]) * inv[k];
-    const float tf = ((far_plane - org[k]) + margin[k]) * inv[k];
+    const float near_plane = kr.neg[k] ? tree.bounds.hi[k] : tree.bounds.lo[k];
+    const float far_plane = kr.neg[k] ? tree.bounds.lo[k] : tree.bounds.hi[k];
+    const float tn = ((near_plane - org[k]) - kr.margin[k]) * kr.inv[k];
+    const float tf = ((far_plane - org[k]) + kr.margin[k]) * kr.inv[k];
     t0 = tn > t0 ? tn : t0;
     t1 = tf < t1 ? tf : t1;
   }
-  if (!(t0 <= t1)) return hit;
+  kr.t0 = t0;
+  kr.t1 = t1;
+  return t0 <= t1;
+}
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
+  if (tree.empty || !ray_is_valid(ray)) return rec.hit();
+  KdRay kr;
+  if (!kd_enter_root(tree, ray, kr)) return rec.hit();
+  const Vec3f& org = ray.org;
+  const float* inv = kr.inv;
+  const float* margin = kr.margin;
+  const uint32_t* neg = kr.neg;
+  const float delta_t = kr.delta_t;
+  float t0 = kr.t0, t1 = kr.t1;
 
   const TrianglePrecompute<kTest> pre(ray);
-  float best_t = ray.tmax;
 
   struct Entry {
     uint32_t node;
@@ -124,7 +136,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   while (true) {
     KdNode n = tree.nodes[node];
     while (!n.is_leaf()) {
-      if constexpr (kCount) stats->nodes_visited++;
+      rec.count_nodes(1);
       const int k = n.axis();
       const float rel = n.split() - org[k];
       // Where the ray leaves the (inflated) near child and enters the far one.
@@ -146,26 +158,16 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       n = tree.nodes[node];
     }
 
-    if constexpr (kCount) stats->nodes_visited++;
-    const uint32_t* id = tree.ids + n.offset();
-    for (uint32_t i = 0, count = n.count(); i < count; ++i) {
-      const KdLeafTriangle* tri = tree.tris + id[i];
-      if constexpr (kCount) stats->triangle_tests++;
-      float t, u, v;
-      if (pre.intersect(ray, tri->p0, tri->p1, tri->p2, ray.tmin, best_t, t, u, v)) {
-        if (t < best_t || !hit.valid()) {
-          hit = Hit{t, u, v, tri->prim};
-          best_t = t;
-          if constexpr (kAnyHit) return hit;
-        }
-      }
+    rec.count_nodes(1);
+    if (intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.offset(), n.count(), rec)) {
+      if constexpr (kAnyHit) return rec.hit();
     }
 
     // Next cell that can still hold a closer hit; cells starting beyond the
     // closest hit so far (plus the test's distance error) are dropped.
-    const float t_bound = best_t + delta_t;
+    const float t_bound = rec.tmax() + delta_t;
     while (true) {
-      if (sp == 0) return hit;
+      if (sp == 0) return rec.hit();
       const Entry& e = stack[--sp];
       if (e.t0 <= t_bound) {
         node = e.node;

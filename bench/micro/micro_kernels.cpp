@@ -16,7 +16,7 @@
 #include "accel/core/slab_test.h"
 #include "accel/grid/dda.h"
 #include "accel/grid/dda_grid.h"
-#include "tracer/pcg.h"
+#include "base/pcg.h"
 
 namespace raylab {
 namespace {

@@ -1,4 +1,4 @@
-#include "bench/oracle.h"
+#include "checks/oracle.h"
 
 #include <gmpxx.h>
 
@@ -280,10 +280,11 @@ OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double gr
 }
 
 namespace {
+}  // namespace
+
 bool same_distance(double a, double b, double tol) {
   return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30});
 }
-}  // namespace
 
 Verdict oracle_judge(const TriangleMesh& mesh, const Ray& ray, const Hit& hit, const OracleHit& truth, double tie_tol,
                      double graze_tol) {

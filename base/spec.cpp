@@ -1,4 +1,4 @@
-#include "accel/spec.h"
+#include "base/spec.h"
 
 #include <charconv>
 #include <cmath>

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/aabb.h"
-#include "accel/core/vec.h"
+#include "base/aabb.h"
+#include "base/vec.h"
 
 namespace raylab {
 

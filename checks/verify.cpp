@@ -1,4 +1,4 @@
-#include "bench/verify.h"
+#include "checks/verify.h"
 
 #include <cmath>
 
@@ -7,24 +7,20 @@
 #include <tbb/task_arena.h>
 
 #include "accel/registry.h"
-#include "bench/oracle.h"
-#include "bench/trace.h"
+#include "checks/classify.h"
+#include "checks/oracle.h"
+#include "tracer/trace.h"
 
 namespace raylab {
 
 namespace {
 
-bool same_distance(double a, double b, double tol) { return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30}); }
-
 struct Counts {
-  size_t hit_miss = 0, prim = 0, ties = 0, raylab_wrong = 0, embree_wrong = 0, occlusion = 0;
+  DisagreementCounts d;
+  size_t occlusion = 0;
   double max_rel = 0.0;
   Counts& operator+=(const Counts& o) {
-    hit_miss += o.hit_miss;
-    prim += o.prim;
-    ties += o.ties;
-    raylab_wrong += o.raylab_wrong;
-    embree_wrong += o.embree_wrong;
+    d += o.d;
     occlusion += o.occlusion;
     max_rel = std::max(max_rel, o.max_rel);
     return *this;
@@ -43,21 +39,14 @@ Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<
           if (static_cast<bool>(got_occ[i]) != a.valid()) c.occlusion++;
           if (e.valid() && a.valid())
             c.max_rel = std::max(c.max_rel, std::fabs(static_cast<double>(a.t) - e.t) / std::max(1e-30, std::fabs(static_cast<double>(e.t))));
-          const bool hit_miss = e.valid() != a.valid();
-          const bool prim = e.valid() && a.valid() && e.prim != a.prim;
-          if (!hit_miss && !prim) continue;
-          if (prim && same_distance(a.t, e.t, tol)) {
-            c.ties++;
+          const Screen screen = screen_closest(a, e, tol);
+          if (screen == Screen::Agree) continue;
+          if (screen == Screen::Tie) {
+            c.d.ties++;
             continue;
           }
           const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
-          const Verdict va = oracle_judge(scene.mesh, set.rays[i], a, o, tol);
-          const Verdict ve = oracle_judge(scene.mesh, set.rays[i], e, o, tol);
-          if (va == Verdict::Wrong) c.raylab_wrong++;
-          if (ve == Verdict::Wrong) c.embree_wrong++;
-          if (va != Verdict::Wrong && ve != Verdict::Wrong) c.ties++;
-          else if (hit_miss) c.hit_miss++;
-          else c.prim++;
+          c.d.add(classify_disagreement(scene.mesh, set.rays[i], a, e, o, tol));
         }
         return c;
       },
@@ -73,12 +62,7 @@ Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vecto
         for (size_t i = r.begin(); i < r.end(); ++i) {
           if (ref[i] == got[i]) continue;
           const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
-          const Verdict va = oracle_judge_occluded(set.rays[i], got[i] != 0, o);
-          const Verdict ve = oracle_judge_occluded(set.rays[i], ref[i] != 0, o);
-          if (va == Verdict::Wrong) c.raylab_wrong++;
-          if (ve == Verdict::Wrong) c.embree_wrong++;
-          if (va != Verdict::Wrong && ve != Verdict::Wrong) c.ties++;
-          else c.hit_miss++;
+          c.d.add(classify_occlusion_disagreement(set.rays[i], got[i] != 0, ref[i] != 0, o));
         }
         return c;
       },
@@ -127,14 +111,14 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
         TraceOutput occ;
         trace_set(*accel, as_occlusion, threads, occ);
         arena.execute([&] {
-          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, opt.tie_tolerance);
+          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, kTieTolerance);
         });
       }
-      rec.hit_miss_disagree = c.hit_miss;
-      rec.prim_disagree = c.prim;
-      rec.ties = c.ties;
-      rec.raylab_wrong = c.raylab_wrong;
-      rec.embree_wrong = c.embree_wrong;
+      rec.hit_miss_disagree = c.d.hit_miss;
+      rec.prim_disagree = c.d.prim;
+      rec.ties = c.d.ties;
+      rec.raylab_wrong = c.d.raylab_wrong;
+      rec.embree_wrong = c.d.embree_wrong;
       rec.occlusion_disagree = c.occlusion;
       rec.max_rel_t_err = c.max_rel;
       records.push_back(rec);

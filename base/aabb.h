@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "accel/core/vec.h"
+#include "base/vec.h"
 
 namespace raylab {
 

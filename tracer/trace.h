@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "accel/accelerator.h"
-#include "bench/ray_sets.h"
+#include "tracer/ray_sets.h"
 
 namespace raylab {
 

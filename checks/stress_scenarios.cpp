@@ -1,4 +1,4 @@
-// The scenes and rays of `raylab stress` (bench/stress.h).
+// The scenes and rays of `raylab stress` (checks/stress.h).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -7,12 +7,12 @@
 
 #include <fmt/format.h>
 
-#include "accel/spec.h"
-#include "bench/ray_sets.h"
-#include "bench/stress.h"
+#include "base/spec.h"
+#include "tracer/ray_sets.h"
+#include "checks/stress.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_registry.h"
-#include "tracer/pcg.h"
+#include "base/pcg.h"
 
 namespace raylab {
 
@@ -47,16 +47,6 @@ const std::vector<ScenarioInfo>& scenario_infos() {
                "on surfaces, tmin = tmax, negative tmin, tmax = +inf, denormal components"},
   };
   return infos;
-}
-
-Scene scene_from_mesh(std::string name, TriangleMesh mesh) {
-  Scene s;
-  s.name = std::move(name);
-  s.mesh = std::move(mesh);
-  s.materials = {Material{}};
-  s.material_ids.assign(s.mesh.num_triangles(), 0);
-  if (s.mesh.num_triangles() > 0) s.view = frame_bounds(s.mesh.bounds());
-  return s;
 }
 
 // Scale then translate, vertices and view.
@@ -393,6 +383,100 @@ std::vector<std::string> expand_stress_scenarios(const std::string& list) {
   return out;
 }
 
+namespace {
+
+// Coplanar triangles, plus rays lying in their plane and along it.
+StressScenario flat_scenario(double scale, uint64_t seed) {
+  StressScenario sc;
+  sc.scene = make_coplanar_scene(2000, 32, 1, seed);
+  sc.rays = standard_rays(sc.scene, scaled(49152, scale), seed);
+  // Rays lying in the plane y = 0.5 (+-0 y component) and rays along it from outside.
+  Pcg32 rng(mix64(seed + 99), 0xF1A7);
+  const size_t extra = scaled(16384, scale);
+  for (size_t i = 0; i < extra; ++i) {
+    const Vec3f o(rng.uniform() * 1.2f - 0.1f, 0.5f, rng.uniform() * 1.2f - 0.1f);
+    Vec3f d = random_unit(rng);
+    if (i % 2) d.y() = (i % 4 == 1) ? 0.0f : -0.0f;
+    sc.rays.push_back(Ray(o + (i % 2 ? Vec3f::Zero() : Vec3f(0, 1, 0)), i % 2 ? d : Vec3f(d.x(), -std::fabs(d.y()) - 0.1f, d.z())));
+  }
+  return sc;
+}
+
+// Good triangles with degenerate ones shuffled among them (must never be hit).
+StressScenario degenerate_scenario(double scale, uint64_t seed) {
+  StressScenario sc;
+  TriangleMesh m = make_uv_sphere(32, 16, Vec3f(0.5f, 0.5f, 0.5f), 0.3f);
+  m.append(make_triangle_soup(1000, seed, 1.0f).mesh);
+  const size_t good = m.num_triangles();
+  Pcg32 rng(mix64(seed + 17), 0xDE6E);
+  // Coordinates on a 1/4096 lattice so that a + k * e is exact: collinear triangles are exactly collinear.
+  auto lattice = [&] { return std::floor(rng.uniform() * 4096.0f) / 4096.0f; };
+  for (size_t i = 0; i < 1500; ++i) {
+    const Vec3f a(lattice(), lattice(), lattice());
+    const uint32_t base = static_cast<uint32_t>(m.vertices.size());
+    if (i % 3 == 0) {  // three equal vertices
+      m.vertices.insert(m.vertices.end(), {a, a, a});
+    } else if (i % 3 == 1) {  // two equal vertices, one apart
+      m.vertices.insert(m.vertices.end(), {a, a, Vec3f(lattice(), lattice(), lattice())});
+    } else {  // three distinct collinear vertices
+      const Vec3f e(std::floor(rng.uniform() * 64.0f) / 4096.0f, std::floor(rng.uniform() * 64.0f) / 4096.0f,
+                    std::floor(rng.uniform() * 64.0f) / 4096.0f);
+      m.vertices.insert(m.vertices.end(), {a, Vec3f(a + 3.0f * e), Vec3f(a + 1.0f * e)});
+    }
+    m.triangles.push_back({base, base + 1, base + 2});
+  }
+  // Shuffle the degenerate triangles among the good ones (deterministically).
+  std::vector<uint8_t> flag(m.num_triangles(), 0);
+  for (size_t i = good; i < flag.size(); ++i) flag[i] = 1;
+  for (size_t i = flag.size(); i > 1; --i) {
+    const size_t j = std::min(i - 1, static_cast<size_t>(rng.uniform() * i));
+    std::swap(m.triangles[i - 1], m.triangles[j]);
+    std::swap(flag[i - 1], flag[j]);
+  }
+  sc.scene = scene_from_mesh("degenerate", std::move(m));
+  sc.must_not_hit = std::move(flag);
+  sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
+  return sc;
+}
+
+// One triangle, with rays aimed at its edges and vertices.
+StressScenario single_scenario(double scale, uint64_t seed) {
+  StressScenario sc;
+  TriangleMesh m;
+  m.vertices = {Vec3f(0.1f, 0.2f, 0.3f), Vec3f(0.9f, 0.3f, 0.4f), Vec3f(0.3f, 0.8f, 0.6f)};
+  m.triangles = {{0, 1, 2}};
+  sc.scene = scene_from_mesh("single", std::move(m));
+  sc.rays = standard_rays(sc.scene, scaled(32768, scale), seed);
+  Pcg32 rng(mix64(seed + 5), 0x5151);
+  const auto& v = sc.scene.mesh.vertices;
+  for (size_t i = 0; i < scaled(8192, scale); ++i) {
+    const int e = static_cast<int>(i % 3);
+    const Vec3f target = (i % 2) ? v[e] : Vec3f(v[e] + rng.uniform() * (v[(e + 1) % 3] - v[e]));
+    const Vec3f o = target + random_unit(rng) * 2.0f;
+    sc.rays.push_back(Ray(o, target - o));
+  }
+  return sc;
+}
+
+// The Cornell box with ray corner cases (tmin == tmax, huge and tiny directions, ...).
+StressScenario corner_case_scenario(double scale, uint64_t seed) {
+  StressScenario sc;
+  sc.scene = make_cornell_box();
+  const RaySet prim = make_jittered_primary_rays(sc.scene, 4096, seed + 7);
+  // Hit distances for the tmin == tmax rays: the plane distance along the
+  // view axis is good enough (the oracle judges the answers, not this).
+  std::vector<float> t(prim.rays.size(), std::numeric_limits<float>::quiet_NaN());
+  for (size_t i = 0; i < t.size(); ++i) {
+    // Distance to the back wall plane z = 559.2 (published Cornell box).
+    const Ray& r = prim.rays[i];
+    if (r.dir.z() != 0.0f) t[i] = (559.2f - r.org.z()) / r.dir.z();
+  }
+  sc.rays = corner_case_rays(sc.scene, scaled(65536, scale), seed, prim.rays, t);
+  return sc;
+}
+
+}  // namespace
+
 StressScenario make_stress_scenario(const std::string& name, double scale, uint64_t seed) {
   const auto& names = stress_scenario_names();
   if (std::find(names.begin(), names.end(), name) == names.end())
@@ -406,17 +490,7 @@ StressScenario make_stress_scenario(const std::string& name, double scale, uint6
     sc.scene = transformed_cornell(s, Vec3f::Constant(off));
     sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
   } else if (name == "flat") {
-    sc.scene = make_coplanar_scene(2000, 32, 1, seed);
-    sc.rays = standard_rays(sc.scene, scaled(49152, scale), seed);
-    // Rays lying in the plane y = 0.5 (+-0 y component) and rays along it from outside.
-    Pcg32 rng(mix64(seed + 99), 0xF1A7);
-    const size_t extra = scaled(16384, scale);
-    for (size_t i = 0; i < extra; ++i) {
-      const Vec3f o(rng.uniform() * 1.2f - 0.1f, 0.5f, rng.uniform() * 1.2f - 0.1f);
-      Vec3f d = random_unit(rng);
-      if (i % 2) d.y() = (i % 4 == 1) ? 0.0f : -0.0f;
-      sc.rays.push_back(Ray(o + (i % 2 ? Vec3f::Zero() : Vec3f(0, 1, 0)), i % 2 ? d : Vec3f(d.x(), -std::fabs(d.y()) - 0.1f, d.z())));
-    }
+    sc = flat_scenario(scale, seed);
   } else if (name == "slivers") {
     Pcg32 rng(mix64(seed + 3), 0x511E);
     TriangleMesh m = make_needles(4000, rng);
@@ -429,54 +503,12 @@ StressScenario make_stress_scenario(const std::string& name, double scale, uint6
     sc.scene = scene_from_mesh("duplicates", std::move(m));
     sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
   } else if (name == "degenerate") {
-    TriangleMesh m = make_uv_sphere(32, 16, Vec3f(0.5f, 0.5f, 0.5f), 0.3f);
-    m.append(make_triangle_soup(1000, seed, 1.0f).mesh);
-    const size_t good = m.num_triangles();
-    Pcg32 rng(mix64(seed + 17), 0xDE6E);
-    // Coordinates on a 1/4096 lattice so that a + k * e is exact: collinear triangles are exactly collinear.
-    auto lattice = [&] { return std::floor(rng.uniform() * 4096.0f) / 4096.0f; };
-    for (size_t i = 0; i < 1500; ++i) {
-      const Vec3f a(lattice(), lattice(), lattice());
-      const uint32_t base = static_cast<uint32_t>(m.vertices.size());
-      if (i % 3 == 0) {  // three equal vertices
-        m.vertices.insert(m.vertices.end(), {a, a, a});
-      } else if (i % 3 == 1) {  // two equal vertices, one apart
-        m.vertices.insert(m.vertices.end(), {a, a, Vec3f(lattice(), lattice(), lattice())});
-      } else {  // three distinct collinear vertices
-        const Vec3f e(std::floor(rng.uniform() * 64.0f) / 4096.0f, std::floor(rng.uniform() * 64.0f) / 4096.0f,
-                      std::floor(rng.uniform() * 64.0f) / 4096.0f);
-        m.vertices.insert(m.vertices.end(), {a, Vec3f(a + 3.0f * e), Vec3f(a + 1.0f * e)});
-      }
-      m.triangles.push_back({base, base + 1, base + 2});
-    }
-    // Shuffle the degenerate triangles among the good ones (deterministically).
-    std::vector<uint8_t> flag(m.num_triangles(), 0);
-    for (size_t i = good; i < flag.size(); ++i) flag[i] = 1;
-    for (size_t i = flag.size(); i > 1; --i) {
-      const size_t j = std::min(i - 1, static_cast<size_t>(rng.uniform() * i));
-      std::swap(m.triangles[i - 1], m.triangles[j]);
-      std::swap(flag[i - 1], flag[j]);
-    }
-    sc.scene = scene_from_mesh("degenerate", std::move(m));
-    sc.must_not_hit = std::move(flag);
-    sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
+    sc = degenerate_scenario(scale, seed);
   } else if (name == "stadium") {
     sc.scene = load_scene("stadium");
     sc.rays = standard_rays(sc.scene, scaled(32768, scale), seed);
   } else if (name == "single") {
-    TriangleMesh m;
-    m.vertices = {Vec3f(0.1f, 0.2f, 0.3f), Vec3f(0.9f, 0.3f, 0.4f), Vec3f(0.3f, 0.8f, 0.6f)};
-    m.triangles = {{0, 1, 2}};
-    sc.scene = scene_from_mesh("single", std::move(m));
-    sc.rays = standard_rays(sc.scene, scaled(32768, scale), seed);
-    Pcg32 rng(mix64(seed + 5), 0x5151);
-    const auto& v = sc.scene.mesh.vertices;
-    for (size_t i = 0; i < scaled(8192, scale); ++i) {
-      const int e = static_cast<int>(i % 3);
-      const Vec3f target = (i % 2) ? v[e] : Vec3f(v[e] + rng.uniform() * (v[(e + 1) % 3] - v[e]));
-      const Vec3f o = target + random_unit(rng) * 2.0f;
-      sc.rays.push_back(Ray(o, target - o));
-    }
+    sc = single_scenario(scale, seed);
   } else if (name == "empty") {
     sc.scene.name = "empty";
     sc.scene.materials = {Material{}};
@@ -484,17 +516,7 @@ StressScenario make_stress_scenario(const std::string& name, double scale, uint6
     for (size_t i = 0; i < scaled(16384, scale); ++i)
       sc.rays.push_back(Ray(random_unit(rng) * 10.0f * rng.uniform(), random_unit(rng), 0.0f, (i % 2) ? kInf : 100.0f));
   } else if (name == "rays") {
-    sc.scene = make_cornell_box();
-    const RaySet prim = make_jittered_primary_rays(sc.scene, 4096, seed + 7);
-    // Hit distances for the tmin == tmax rays: the plane distance along the
-    // view axis is good enough (the oracle judges the answers, not this).
-    std::vector<float> t(prim.rays.size(), std::numeric_limits<float>::quiet_NaN());
-    for (size_t i = 0; i < t.size(); ++i) {
-      // Distance to the back wall plane z = 559.2 (published Cornell box).
-      const Ray& r = prim.rays[i];
-      if (r.dir.z() != 0.0f) t[i] = (559.2f - r.org.z()) / r.dir.z();
-    }
-    sc.rays = corner_case_rays(sc.scene, scaled(65536, scale), seed, prim.rays, t);
+    sc = corner_case_scenario(scale, seed);
   }
   if (sc.scene.name.empty()) sc.scene.name = name;
   sc.name = name;

@@ -1,14 +1,15 @@
-#include "bench/ray_sets.h"
+#include "tracer/ray_sets.h"
 
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "accel/spec.h"
+#include "base/spec.h"
 #include "tracer/camera.h"
 #include "tracer/lights.h"
-#include "tracer/pcg.h"
+#include "base/pcg.h"
 #include "tracer/sampling.h"
+#include "tracer/spawn.h"
 
 namespace raylab {
 
@@ -60,21 +61,6 @@ RaySet make_random_rays(const Scene& scene, size_t count, uint64_t seed) {
 
 namespace {
 
-// The offset for a scene whose bounds' diagonal is known (computing the
-// bounds walks every vertex: once per ray set, not once per ray).
-float offset_for(float diag, const Vec3f& p) { return 2e-5f * p.cwiseAbs().maxCoeff() + 1e-6f * diag; }
-
-float bounds_diagonal(const Scene& scene) {
-  const Aabb b = scene.bounds();
-  return b.is_empty() ? 0.0f : b.diagonal().norm();
-}
-
-}  // namespace
-
-float secondary_ray_offset(const Scene& scene, const Vec3f& p) { return offset_for(bounds_diagonal(scene), p); }
-
-namespace {
-
 // Hit point and the geometric normal facing the incoming ray.
 bool surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Vec3f& p, Vec3f& n) {
   if (!hit.valid()) return false;
@@ -95,13 +81,13 @@ bool surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Vec3f& p, Ve
 RaySet make_diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const Hit> hits, uint64_t seed) {
   RaySet set{"diffuse", false, {}};
   Pcg32 rng(mix64(seed), 0xD1FF);
-  const float diag = bounds_diagonal(scene);
+  const SpawnOffset spawn(scene.bounds());
   for (size_t i = 0; i < primary.rays.size(); ++i) {
     Vec3f p, n;
     if (!surface_at(scene, primary.rays[i], hits[i], p, n)) continue;
     float pdf;
     const Vec3f d = sample_cosine_hemisphere(n, rng.uniform(), rng.uniform(), pdf);
-    set.rays.emplace_back(p + offset_for(diag, p) * n, d);
+    set.rays.emplace_back(spawn.origin(p, n, primary.rays[i].org), d);
   }
   return set;
 }
@@ -111,18 +97,17 @@ RaySet make_shadow_rays(const Scene& scene, const RaySet& primary, std::span<con
   Pcg32 rng(mix64(seed), 0x5AD0);
   const LightSampler lights(scene);
   const Aabb b = scene.bounds();
-  const float diag = bounds_diagonal(scene);
+  const SpawnOffset spawn(scene.bounds());
   const Vec3f point_light =
       b.is_empty() ? Vec3f(0, 10, 0) : Vec3f(b.center() + b.diagonal().norm() * Vec3f(0.3f, 1.0f, 0.2f));
   for (size_t i = 0; i < primary.rays.size(); ++i) {
     Vec3f p, n;
     if (!surface_at(scene, primary.rays[i], hits[i], p, n)) continue;
-    const Vec3f origin = p + offset_for(diag, p) * n;
+    const Vec3f origin = spawn.origin(p, n, primary.rays[i].org);
     Vec3f target = point_light;
     if (!lights.empty()) target = lights.sample(rng.uniform(), rng.uniform(), rng.uniform()).point;
-    const Vec3f d = target - origin;
-    if (!(d.squaredNorm() > 0.0f)) continue;
-    set.rays.emplace_back(origin, d, 0.0f, 1.0f - 1e-4f);
+    if (!((target - origin).squaredNorm() > 0.0f)) continue;
+    set.rays.push_back(shadow_ray_to(origin, target));
   }
   return set;
 }

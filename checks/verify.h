@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/ray_sets.h"
+#include "tracer/ray_sets.h"
 #include "scenes/scene.h"
 
 namespace raylab {
@@ -30,7 +30,6 @@ struct VerifyOptions {
   size_t rays = 65536;  // per ray set
   uint64_t seed = 1;
   int threads = 0;      // 0 = all cores
-  double tie_tolerance = 1e-4;  // relative distance under which two hits are a tie
   std::string reference = "embree:robust=1";
 };
 

@@ -1,4 +1,4 @@
-#include "accel/util/atomic_file.h"
+#include "base/atomic_file.h"
 
 #include <unistd.h>
 

@@ -24,9 +24,9 @@
 // in a triangle's plane.
 #include <cstdint>
 
-#include "accel/core/hit.h"
-#include "accel/core/ray.h"
-#include "accel/core/triangle_mesh.h"
+#include "base/hit.h"
+#include "base/ray.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 
@@ -55,6 +55,13 @@ OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_
 // Exact decision alone (always GMP), for tests and for the leak test.
 OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray);
 
+// Relative distance under which two hits on different triangles are a tie
+// (the one tolerance of verify, stress and bench, see classify.h).
+inline constexpr double kTieTolerance = 1e-4;
+
+// |a - b| within tol relative to the larger magnitude.
+bool same_distance(double a, double b, double tol = kTieTolerance);
+
 enum class Verdict : uint8_t { Correct, Tie, Wrong };
 
 // Judges one closest-hit answer against the oracle's `truth` for the ray:
@@ -62,7 +69,7 @@ enum class Verdict : uint8_t { Correct, Tie, Wrong };
 // Tie when it differs only where float arithmetic may (a triangle at the same
 // distance within `tie_tol` relative, or a grazing ray); Wrong otherwise.
 Verdict oracle_judge(const TriangleMesh& mesh, const Ray& ray, const Hit& hit, const OracleHit& truth,
-                     double tie_tol = 1e-4, double graze_tol = 1e-5);
+                     double tie_tol = kTieTolerance, double graze_tol = 1e-5);
 
 // The same for an any-hit (occlusion) answer.
 Verdict oracle_judge_occluded(const Ray& ray, bool occluded, const OracleHit& truth);

@@ -1,4 +1,4 @@
-#include "bench/trace.h"
+#include "tracer/trace.h"
 
 #include <algorithm>
 #include <thread>
@@ -7,7 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "accel/util/timer.h"
+#include "base/timer.h"
 
 namespace raylab {
 

@@ -3,7 +3,7 @@
 // to break something: precision far from the origin, zero-thickness bounds,
 // degenerate triangles, shared edges and vertices, ray corner cases) run
 // against every accelerator with Embree (robust mode) as the reference. Every
-// disagreement is arbitrated by the oracle (bench/oracle.h, exact arithmetic
+// disagreement is arbitrated by the oracle (checks/oracle.h, exact arithmetic
 // at edges and vertices); `raylab_wrong` and `embree_wrong` are counted
 // separately. The watertight scenarios also count leaks: rays that exactly
 // cross a closed surface but miss it (or reach its far side), and rays from
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "accel/core/ray.h"
+#include "base/ray.h"
 #include "scenes/scene.h"
 
 namespace raylab {
@@ -84,14 +84,13 @@ struct StressOptions {
   int threads = 0;                      // 0 = all cores
   double time_budget_s = 2.0;           // per scenario x accelerator trace; slower ones trace a subset
   double slow_ratio = 0.05;             // below this ratio to Embree a method is reported as slow
-  double tie_tolerance = 1e-4;
   std::string reference = "embree:robust=1";
   bool add_variants = true;             // watertight scenarios: also tri=mt variants and embree robust
 };
 
 // The accelerator specs a scenario runs: the given ones, plus for watertight
-// scenarios (when add_variants) a tri=mt variant of each one that has the
-// parameter, and embree:robust=1 next to embree.
+// scenarios (when add_variants) each one's variant from the registry: its
+// robust mode (embree:robust=1), else its Moller-Trumbore kernel (tri=mt).
 std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::vector<std::string>& specs,
                                           const StressOptions& options);
 

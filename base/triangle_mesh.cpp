@@ -1,11 +1,11 @@
-#include "accel/core/triangle_mesh.h"
+#include "base/triangle_mesh.h"
 
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "accel/core/hit.h"
-#include "accel/core/ray.h"
+#include "base/hit.h"
+#include "base/ray.h"
 
 namespace raylab {
 
@@ -42,11 +42,5 @@ void TriangleMesh::append(const TriangleMesh& other) {
   for (const auto& t : other.triangles) triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
 }
 
-bool ray_is_valid(const Ray& r) {
-  const bool org_ok = std::isfinite(r.org.x()) && std::isfinite(r.org.y()) && std::isfinite(r.org.z());
-  const bool dir_ok = std::isfinite(r.dir.x()) && std::isfinite(r.dir.y()) && std::isfinite(r.dir.z()) &&
-                      (r.dir.x() != 0.0f || r.dir.y() != 0.0f || r.dir.z() != 0.0f);
-  return org_ok && dir_ok && !std::isnan(r.tmin) && !std::isnan(r.tmax);
-}
 
 }  // namespace raylab

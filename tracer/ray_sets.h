@@ -47,7 +47,4 @@ struct RaySetOptions {
 std::vector<RaySet> make_ray_sets(const Scene& scene, const std::vector<std::string>& names,
                                   const Accelerator& reference, const RaySetOptions& options);
 
-// Offset applied to secondary ray origins along the normal.
-float secondary_ray_offset(const Scene& scene, const Vec3f& p);
-
 }  // namespace raylab

@@ -1,17 +1,21 @@
 #pragma once
-// Common shell of the grid accelerators: the batch loops of the
-// Accelerator interface around a structure's templated single-ray kernel
-// `trace<TriangleTest, kAnyHit, kCount>(ray, stats)`. Dispatch is virtual per
-// batch; the loop inside calls the kernel directly.
+// The generic batch shell: the batch loops of the Accelerator interface
+// around a structure's templated single-ray kernel
+//   template <TriangleTest kTest, bool kAnyHit, bool kCount>
+//   Hit trace(const Ray& ray, TraversalStats* stats) const;
+// Dispatch is virtual per batch (and on the triangle test, once per batch);
+// the loop inside calls the kernel directly. `Base` is the interface the
+// shell implements: Accelerator, or a structure's own per-layout interface
+// with the same two batch calls.
 #include "accel/accelerator.h"
 #include "accel/core/intersect_triangle.h"
 
 namespace raylab {
 
-template <typename Structure>
-class GridAccelerator : public Accelerator {
+template <typename Structure, typename Base = Accelerator>
+class BatchAccelerator : public Base {
  protected:
-  explicit GridAccelerator(TriangleTest test) : test_(test) {}
+  explicit BatchAccelerator(TriangleTest test) : test_(test) {}
 
  public:
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
@@ -35,6 +39,8 @@ class GridAccelerator : public Accelerator {
       }
     });
   }
+
+  TriangleTest triangle_test() const { return test_; }
 
  private:
   TriangleTest test_;

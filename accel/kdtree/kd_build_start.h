@@ -1,0 +1,47 @@
+#pragma once
+// The start both k-d tree builders share: the size limit, the depth limit in
+// force, and every triangle's box with their union (computed in parallel).
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include "accel/kdtree/kd_build_options.h"
+#include "accel/kdtree/kd_tree_writer.h"
+#include "accel/kdtree/kdtree_node.h"
+#include "base/triangle_mesh.h"
+
+namespace raylab {
+
+// Throws std::length_error when the mesh has more than max_triangles triangles.
+inline int kd_build_depth_limit(const TriangleMesh& mesh, const KdBuildOptions& opt, size_t max_triangles) {
+  const size_t n = mesh.num_triangles();
+  if (n > max_triangles) throw std::length_error(fmt::format("kdtree: {} triangles, at most {} supported", n, max_triangles));
+  return opt.max_depth < 0 ? kd_default_max_depth(n) : std::min(opt.max_depth, kKdMaxDepthLimit);
+}
+
+// The tree of an empty mesh: one empty leaf.
+inline KdTree empty_kdtree(KdTreeWriter& writer) {
+  writer.set_leaf(0, {});
+  return writer.finish(Aabb::empty());
+}
+
+// boxes[i] = the bounds of triangle i; returns their union.
+inline Aabb kd_triangle_boxes(const TriangleMesh& mesh, std::vector<Aabb>& boxes) {
+  boxes.resize(mesh.num_triangles());
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, boxes.size(), 8192), Aabb(),
+      [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          boxes[i] = mesh.triangle_bounds(i);
+          acc.extend(boxes[i]);
+        }
+        return acc;
+      },
+      [](const Aabb& a, const Aabb& b) { return merge(a, b); });
+}
+
+}  // namespace raylab
