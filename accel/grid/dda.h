@@ -34,7 +34,7 @@ struct DdaRay {
   double inv_dir[3];  // 1/dir, unused (infinity) where dir is zero
   int32_t step[3];    // +1, -1, or 0 for a zero component (either sign)
 
-  explicit DdaRay(const Ray& r) {
+  [[gnu::always_inline]] explicit DdaRay(const Ray& r) {
     for (int a = 0; a < 3; ++a) {
       org[a] = r.org[a];
       dir[a] = r.dir[a];
@@ -55,7 +55,7 @@ struct DdaRay {
 // Clips [t0, t1] to the box [lo, hi]; false when nothing is left. A zero
 // direction component keeps the interval when the origin lies in the slab
 // (boundaries included) and empties it otherwise.
-inline bool dda_clip(const DdaRay& r, const double lo[3], const double hi[3], double& t0, double& t1) {
+[[gnu::always_inline]] inline bool dda_clip(const DdaRay& r, const double lo[3], const double hi[3], double& t0, double& t1) {
   for (int a = 0; a < 3; ++a) {
     if (r.step[a] == 0) {
       if (r.org[a] < lo[a] || r.org[a] > hi[a]) return false;

@@ -32,9 +32,19 @@ inline TwoLevelGridView grid_view(const TwoLevelGrid& g) {
 
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
-  return walk_grid<kTest, kAnyHit, kCount>(g.top, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
-    auto& rec = q.rec;
-    dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) {
+  using Recorder = HitRecorder<kAnyHit, kCount>;
+  if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
+  const DdaRay dr(ray);
+  double t0 = ray.tmin, t1 = ray.tmax;
+  if (!dda_clip(dr, g.top.lo, g.top.hi, t0, t1)) return Recorder(ray, stats).hit();
+  // Not through walk_grid: one lambda less around the nested walks keeps
+  // them inlined (measured 12 % faster on the bunny).
+  GridRayQuery<kTest, Recorder> q(ray, stats);
+  Recorder& rec = q.rec;
+  {
+    // always_inline: GCC otherwise keeps this lambda (the whole per-cell
+    // body) out of line, which measured 10 % slower.
+    dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) __attribute__((always_inline)) {
       rec.count_nodes(1);
       const uint32_t k = g.top_cells[top_cell];
       if (k == kEmptyTopCell) return false;
@@ -45,7 +55,7 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
       double s0 = t_enter, s1 = t_exit < rec.tmax() ? t_exit : static_cast<double>(rec.tmax());
       if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
         const uint32_t* offsets = g.offsets + content.offsets_base;
-        const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) {
+        const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) __attribute__((always_inline)) {
           rec.count_nodes(1);
           const uint32_t begin = offsets[cell], end = offsets[cell + 1];
           if (begin == end) return false;
@@ -56,7 +66,8 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
       if constexpr (kAnyHit) return false;
       return q.done_at(t_exit);
     });
-  });
+  }
+  return rec.hit();
 }
 
 }  // namespace raylab
