@@ -104,14 +104,13 @@ struct Scratch {
   EventList new_left[3], new_right[3];
 };
 
-class SahEventBuilder {
+class SahEventBuilder : KdBuilderBase {
  public:
-  SahEventBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
+  using KdBuilderBase::KdBuilderBase;
 
   KdTree run() {
-    max_depth_ = kd_build_depth_limit(mesh_, opt_, kTriMask);
+    if (!start(kTriMask)) return empty_kdtree(writer_);
     const size_t n = mesh_.num_triangles();
-    if (n == 0) return empty_kdtree(writer_);
     const Aabb bounds = kd_triangle_boxes(mesh_, tri_boxes_);
 
     // The root's events come from the triangles' boxes (the root cell holds
@@ -324,9 +323,6 @@ class SahEventBuilder {
     }
   }
 
-  const TriangleMesh& mesh_;
-  KdBuildOptions opt_;
-  int max_depth_ = 0;
   std::vector<Aabb> tri_boxes_;
   // Per-thread working memory, reused from node to node: the classification
   // array indexed by triangle id (the paper's per-triangle flag) and the
@@ -334,7 +330,6 @@ class SahEventBuilder {
   // classify and the end of split_events (or in make_leaf) of one node, with
   // no task switch in between (see the isolated regions).
   tbb::enumerable_thread_specific<Scratch> scratch_;
-  KdTreeWriter writer_;
 };
 
 }  // namespace

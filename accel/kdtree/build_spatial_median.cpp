@@ -24,14 +24,13 @@ struct PrimRef {
 
 constexpr size_t kParallelTaskSize = 1024;
 
-class MedianBuilder {
+class MedianBuilder : KdBuilderBase {
  public:
-  MedianBuilder(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
+  using KdBuilderBase::KdBuilderBase;
 
   KdTree run() {
-    max_depth_ = kd_build_depth_limit(mesh_, opt_, kKdMaxIndex);
+    if (!start(kKdMaxIndex)) return empty_kdtree(writer_);
     const size_t n = mesh_.num_triangles();
-    if (n == 0) return empty_kdtree(writer_);
     std::vector<Aabb> boxes;
     const Aabb bounds = kd_triangle_boxes(mesh_, boxes);
     std::vector<PrimRef> refs(n);
@@ -131,10 +130,6 @@ class MedianBuilder {
     writer_.set_leaf(node, prims);
   }
 
-  const TriangleMesh& mesh_;
-  KdBuildOptions opt_;
-  int max_depth_ = 0;
-  KdTreeWriter writer_;
 };
 
 }  // namespace

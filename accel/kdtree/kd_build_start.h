@@ -29,6 +29,25 @@ inline KdTree empty_kdtree(KdTreeWriter& writer) {
   return writer.finish(Aabb::empty());
 }
 
+// What both builders hold: the mesh, the options, the depth limit in force
+// and the tree being written.
+class KdBuilderBase {
+ public:
+  KdBuilderBase(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
+
+ protected:
+  // Sets the depth limit; false for an empty mesh (then return empty_kdtree(writer_)).
+  bool start(size_t max_triangles) {
+    max_depth_ = kd_build_depth_limit(mesh_, opt_, max_triangles);
+    return mesh_.num_triangles() != 0;
+  }
+
+  const TriangleMesh& mesh_;
+  KdBuildOptions opt_;
+  int max_depth_ = 0;
+  KdTreeWriter writer_;
+};
+
 // boxes[i] = the bounds of triangle i; returns their union.
 inline Aabb kd_triangle_boxes(const TriangleMesh& mesh, std::vector<Aabb>& boxes) {
   boxes.resize(mesh.num_triangles());
