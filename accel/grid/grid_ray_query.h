@@ -35,7 +35,7 @@ struct GridRayQuery {
 
   // Tests the triangles ids[0..count) not yet tested by this ray. Returns
   // true when the recorder stops at the first hit and one was found.
-  [[gnu::always_inline]] bool test_cell(const uint32_t* ids, uint32_t count, const LeafTriangle* tris) {
+  bool test_cell(const uint32_t* ids, uint32_t count, const LeafTriangle* tris) {
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t id = ids[i];
       if (mailbox.seen(id)) continue;
@@ -50,7 +50,7 @@ struct GridRayQuery {
   bool done_at(double t_exit) const { return rec.found() && static_cast<double>(rec.hit().t) <= t_exit; }
 
   // One cell entered by the walk: test its list, then apply the stopping rule.
-  [[gnu::always_inline]] bool visit_cell(const uint32_t* ids, uint32_t count, const LeafTriangle* tris, double t_exit) {
+  bool visit_cell(const uint32_t* ids, uint32_t count, const LeafTriangle* tris, double t_exit) {
     if (test_cell(ids, count, tris)) return true;
     if constexpr (Recorder::kStopAtFirstHit) return false;
     return done_at(t_exit);
