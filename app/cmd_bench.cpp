@@ -39,13 +39,13 @@ struct Preset {
 
 // The real meshes as researchers see them (issue 12): the bunny as framed by
 // its file, Sponza and the conference room from inside with lights inside
-// (scenes/shared/*.json); full adds the dragon in Sponza. Only when run from
+// (scenes/shared/*.json); full adds a second Sponza view and the dragon in Sponza. Only when run from
 // the checkout with ../shared/scenes beside it (`make bench` does), else "".
 std::string interior_view_scenes(bool full) {
   namespace fs = std::filesystem;
   if (!fs::exists("scenes/shared/sponza.json") || !fs::exists("../shared/scenes/sponza.ply")) return "";
   std::string s = ";../shared/scenes/bunny.ply;scenes/shared/sponza.json;scenes/shared/conference.json";
-  if (full) s += ";scenes/shared/dragon_in_sponza.json";
+  if (full) s += ";scenes/shared/sponza_aisle.json;scenes/shared/dragon_in_sponza.json";
   return s;
 }
 

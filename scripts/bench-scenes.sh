@@ -21,6 +21,7 @@ if [ -f "$shared/MANIFEST.tsv" ]; then
   while IFS=$'\t' read -r name file _; do
     if [[ " ${interior[*]} " == *" $name "* ]]; then scenes+=("scenes/shared/$name.json"); else scenes+=("$shared/$file"); fi
   done < <(tail -n +2 "$shared/MANIFEST.tsv")
+  scenes+=("scenes/shared/sponza_aisle.json")  # a second Sponza viewpoint
   for f in "$shared"/spd/*.obj; do scenes+=("$f"); done
 else
   echo "bench-scenes: $shared not present: real meshes skipped" >&2
