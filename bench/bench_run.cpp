@@ -265,12 +265,12 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
 
 std::string format_bench_table(const std::vector<BenchRecord>& records) {
   // "ratio": to single-ray `embree`; "/best": to the fastest Embree mode of the run (named in the last column).
-  std::string s = fmt::format("{:<28} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7}  {}\n", "accel",
+  std::string s = fmt::format("{:<34} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7}  {}\n", "accel",
                               "rays", "thr", "build ms", "bytes", "prep ms", "Mrays/s", "embree", "ratio", "/best",
                               "agree %", "nodes/r", "tris/r", "best embree");
   for (const auto& r : records) {
-    s += fmt::format("{:<28} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7.1f} {:>7.1f}  {}\n",
-                     r.accel.size() > 28 ? r.accel.substr(0, 28) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
+    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7.1f} {:>7.1f}  {}\n",
+                     r.accel.size() > 34 ? r.accel.substr(0, 34) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
                      r.prepare_ms, r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, r.ratio_to_best_embree,
                      100.0 * r.embree_agreement, r.nodes_per_ray, r.tris_per_ray, r.best_embree);
   }
