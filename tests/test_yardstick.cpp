@@ -444,3 +444,37 @@ TEST(BenchBestEmbree, SelfCheckCommand) {
 
 }  // namespace
 }  // namespace raylab
+
+namespace raylab {
+namespace {
+
+TEST(BenchScenes, SharedMeshesAreBenchmarkedFromTheirInteriorViews) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
+  const std::string cmd = std::string("cd '") + RAYLAB_SOURCE_DIR + "' && bash scripts/bench-scenes.sh --list";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof buf, p)) out += buf;
+  ASSERT_EQ(pclose(p), 0) << out;
+  for (const char* view : {"scenes/shared/sponza.json\n", "scenes/shared/sponza_aisle.json\n",
+                           "scenes/shared/conference.json\n", "scenes/shared/dragon_in_sponza.json\n",
+                           "../shared/scenes/bunny.ply\n"})
+    EXPECT_THAT(out, HasSubstr(view));
+  // The outside framings of the interior scenes are not in the set.
+  for (const char* outside : {"scenes/sponza.ply", "scenes/conference.ply", "scenes/dragon_in_sponza.ply"})
+    EXPECT_THAT(out, ::testing::Not(HasSubstr(outside)));
+  // Every interior view loads, with its camera inside the mesh's bounds and an emitter.
+  for (const char* view : {"sponza.json", "sponza_aisle.json", "conference.json"}) {
+    const Scene s = load_scene(std::string(RAYLAB_SOURCE_DIR) + "/scenes/shared/" + view);
+    EXPECT_TRUE(s.has_emitters()) << view;
+    const Aabb b = s.bounds();
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GT(s.view.from[a], b.lo[a]) << view;
+      EXPECT_LT(s.view.from[a], b.hi[a]) << view;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace raylab
