@@ -64,6 +64,11 @@ const AcceleratorInfo& accelerator_info(const std::string& name) {
   return *info;
 }
 
+bool is_reference_spec(const std::string& spec) {
+  const AcceleratorInfo* info = find_info(Spec::parse(spec).name);
+  return info && info->caps.reference;
+}
+
 std::vector<std::string> coverage_specs() {
   std::vector<std::string> out;
   for (const auto& info : accelerator_registry()) {

@@ -75,6 +75,10 @@ std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, cons
 // The registry line of a name; throws SpecError for unknown names.
 const AcceleratorInfo& accelerator_info(const std::string& name);
 
+// True when the spec names the reference structure (capabilities.reference:
+// Embree, in any of its modes).
+bool is_reference_spec(const std::string& spec);
+
 // Every registered spec worth covering: each name, then each name's `cover` specs.
 std::vector<std::string> coverage_specs();
 
