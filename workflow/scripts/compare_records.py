@@ -101,29 +101,40 @@ def compare_renders(da, db):
     return len(na)
 
 
+def pair(da, db, name):
+    """Both paths when the file is in both runs; None when in neither; a problem when in one."""
+    pa, pb = os.path.join(da, name), os.path.join(db, name)
+    if os.path.exists(pa) and os.path.exists(pb):
+        return pa, pb
+    if os.path.exists(pa) or os.path.exists(pb):
+        problems.append(f"{name}: only in {da if os.path.exists(pa) else db}")
+    return None
+
+
 def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
     da, db = sys.argv[1], sys.argv[2]
     counts = {}
-    for name in ["bench.json", "scaling.json"] + sorted(os.path.basename(p) for p in glob.glob(os.path.join(da, "sweep_*.json"))):
-        pa, pb = os.path.join(da, name), os.path.join(db, name)
-        if not os.path.exists(pb):
-            problems.append(f"{name}: missing in {db}")
-            continue
-        compare_bench(pa, pb, name)
-        counts[name] = len(load(pa)["records"])
-    for pa in sorted(glob.glob(os.path.join(da, "verify_*.json"))):
-        name = os.path.basename(pa)
-        pb = os.path.join(db, name)
-        if not os.path.exists(pb):
-            problems.append(f"{name}: missing in {db}")
-            continue
-        compare_verify(pa, pb, name)
-        counts[name] = len(load(pa)["records"])
-    compare_stress(os.path.join(da, "stress.json"), os.path.join(db, "stress.json"), "stress.json")
-    counts["stress.json"] = len(load(os.path.join(da, "stress.json"))["records"])
-    counts["equal_time"] = compare_renders(os.path.join(da, "equal_time"), os.path.join(db, "equal_time"))
+
+    def names(pattern):
+        return sorted({os.path.basename(p) for d in (da, db) for p in glob.glob(os.path.join(d, pattern))})
+
+    for name in ["bench.json", "scaling.json"] + names("sweep_*.json"):
+        if (p := pair(da, db, name)):
+            compare_bench(*p, name)
+            counts[name] = len(load(p[0])["records"])
+    for name in names("verify_*.json"):
+        if (p := pair(da, db, name)):
+            compare_verify(*p, name)
+            counts[name] = len(load(p[0])["records"])
+    if (p := pair(da, db, "stress.json")):
+        compare_stress(*p, "stress.json")
+        counts["stress.json"] = len(load(p[0])["records"])
+    if os.path.isdir(os.path.join(da, "equal_time")) or os.path.isdir(os.path.join(db, "equal_time")):
+        counts["equal_time"] = compare_renders(os.path.join(da, "equal_time"), os.path.join(db, "equal_time"))
+    if not counts:
+        problems.append(f"no records in {da} or {db}")
     for line in problems:
         print(line)
     summary = ", ".join(f"{k} {v}" for k, v in counts.items())
