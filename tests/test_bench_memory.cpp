@@ -22,21 +22,19 @@ namespace {
 using ::testing::HasSubstr;
 
 TEST(ProcessMemory, PeakFollowsATouchedAllocationAndResets) {
+  ASSERT_GT(resident_bytes(), 0u);
+  EXPECT_GE(peak_resident_bytes(), resident_bytes());
+  // After a reset the peak is the current resident set (where supported).
+  if (reset_peak_resident()) EXPECT_LE(peak_resident_bytes(), resident_bytes() + (16u << 20));
   const size_t before = resident_bytes();
-  ASSERT_GT(before, 0u);
-  EXPECT_GE(peak_resident_bytes(), before);
   constexpr size_t kBytes = 96u << 20;
   {
     auto block = std::make_unique<char[]>(kBytes);
     std::memset(block.get(), 1, kBytes);  // touched, so resident
     EXPECT_GE(resident_bytes(), before + kBytes - (8u << 20));
   }
-  const size_t peak = peak_resident_bytes();
-  EXPECT_GE(peak, before + kBytes - (8u << 20));
-  if (reset_peak_resident()) {
-    // The block is freed (returned to the OS: it is far above the mmap threshold).
-    EXPECT_LT(peak_resident_bytes(), peak - (64u << 20));
-  }
+  // Freed or not (a sanitizer's quarantine keeps it), the peak saw it.
+  EXPECT_GE(peak_resident_bytes(), before + kBytes - (8u << 20));
   EXPECT_GT(available_memory_bytes(), 0u);
 }
 
