@@ -8,7 +8,9 @@ Each CELL.json is a `raylab bench --json` report (header fields, "options", "rec
 first cell's header (machine, Embree, revision), the union of the cells' options, "complete" only
 if every cell completed, the records in the order one run writes them (scene, accelerator,
 ray set, thread count) and every cell's skips; OUT.csv the matching CSV rows, copied from the
-cells' CSVs as raylab wrote them (so the columns follow raylab's, whatever they are).
+cells' CSVs as raylab wrote them (so the columns follow raylab's, whatever they are). When the
+records carry best-Embree figures (ratio_to_best_embree), they are recomputed over all cells,
+since a cell only sees the Embree modes it ran.
 """
 import argparse
 import csv
@@ -37,6 +39,28 @@ def union(lists):
             if v not in out:
                 out.append(v)
     return out
+
+
+def is_embree_spec(spec):
+    return spec == "embree" or spec.startswith("embree:")
+
+
+def refill_best_embree(records):
+    """ratio_to_best_embree as one run computes it: per scene, ray set and thread count the fastest
+    Embree mode (the reference `embree` counts with ratio 1), over every cell's records; each
+    cell's ratios are to the Embree reference timed back to back in that cell."""
+    best = {}
+    for r in records:
+        key = (r["scene"], r["ray_set"], r["threads"])
+        if key not in best:
+            best[key] = (1.0, "embree", r["embree_mrays_per_s"])
+        if is_embree_spec(r["accel"]) and r["ratio_to_embree"] > best[key][0]:
+            best[key] = (r["ratio_to_embree"], r["accel"], r["mrays_per_s"])
+    for r in records:
+        ratio, spec, mrays = best[(r["scene"], r["ray_set"], r["threads"])]
+        r["best_embree"] = spec
+        r["best_embree_mrays_per_s"] = mrays
+        r["ratio_to_best_embree"] = r["ratio_to_embree"] / ratio if ratio > 0 else 0.0
 
 
 def main():
@@ -86,6 +110,14 @@ def main():
     merged["cells"] = len(reports)
     merged["skipped"] = [s for rep in reports for s in rep.get("skipped", [])]
     merged["records"] = [records[i] for i in order]
+    if merged["records"] and "ratio_to_best_embree" in merged["records"][0]:
+        refill_best_embree(merged["records"])
+        for name in ("best_embree", "ratio_to_best_embree"):
+            if name in header_row:
+                col = header_row.index(name)
+                for i in order:
+                    v = records[i][name]
+                    rows[i][col] = v if isinstance(v, str) else format(v, ".9g")
 
     tmp = a.out + ".tmp"
     with open(tmp, "w") as f:
