@@ -150,8 +150,8 @@ run_test() {
   snakemake -s workflow/Snakefile --profile workflow/profiles/slurm \
     --config raylab="$BUILD/raylab" out="$OUT_SLURM" docs_charts=false -q
   t2=$(date +%s)
-  /usr/bin/python3 workflow/scripts/compare_records.py "$OUT_LOCAL" "$OUT_SLURM"
   say "wall times: local $((t1 - t0)) s, Slurm $((t2 - t1)) s"
+  /usr/bin/python3 workflow/scripts/compare_records.py "$OUT_LOCAL" "$OUT_SLURM"
 }
 
 case "${1:-}" in
