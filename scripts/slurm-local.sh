@@ -144,7 +144,7 @@ run_test() {
   local t0 t1 t2
   t0=$(date +%s)
   say "local run: snakemake --cores $(nproc) -> $OUT_LOCAL"
-  snakemake -s workflow/Snakefile --cores "$(nproc)" --config raylab="$BUILD/raylab" out="$OUT_LOCAL" -q
+  snakemake -s workflow/Snakefile --cores "$(nproc)" --config raylab="$BUILD/raylab" out="$OUT_LOCAL" docs_charts=false -q
   t1=$(date +%s)
   say "Slurm run: snakemake --profile workflow/profiles/slurm -> $OUT_SLURM"
   snakemake -s workflow/Snakefile --profile workflow/profiles/slurm \
