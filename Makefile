@@ -21,7 +21,7 @@ test: build
 
 demo: build
 	./$(BUILD)/raylab render --scene cornell --accel bvh --spp 64 --size 512x512 --out out/cornell.png
-	./$(BUILD)/raylab bench --scene cornell --accel all --rays primary,random --quiet
+	./$(BUILD)/raylab bench --scene cornell --accel all --ray-sets primary,random --quiet
 
 # Timing sweeps and charts (scripts/run_bench.sh): out/bench/*.json, *.csv,
 # out/bench/charts/*.png|svg; the quick preset also refreshes docs/charts/.

@@ -29,18 +29,18 @@ void print_build_stats(const Scene& s, const std::string& accel_list, int repeat
 }
 
 Runner add_info(CLI::App& app) {
-  auto scene_spec = std::make_shared<std::string>("cornell");
+  auto scene_spec = std::make_shared<std::string>();
   auto positional = std::make_shared<std::string>();
   auto accel_list = std::make_shared<std::string>();
   auto repeats = std::make_shared<int>(1);
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
-  auto* scene_opt = cmd->add_option("--scene", *scene_spec, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
-  cmd->add_option("scene", *positional, "the scene, as for --scene")->excludes(scene_opt);
+  cmd->add_option("scene", *positional, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
+  cmd->add_option("--scene", *scene_spec, "the scene, as the positional argument");
   cmd->add_option("--accel", *accel_list, "also build these accelerators and print their build figures");
   cmd->add_option("--build-repeats", *repeats, "builds per accelerator (median reported)")->check(CLI::Range(1, 100));
   return [scene_spec, positional, accel_list, repeats]() {
     Timer t;
-    const Scene s = load_scene(positional->empty() ? *scene_spec : *positional);
+    const Scene s = load_scene(pick_scene("info", *scene_spec, *positional, "cornell"));
     const double ms = t.ms();
     const Aabb b = s.bounds();
     size_t emitters = 0;

@@ -7,6 +7,7 @@
 #include "accel/registry.h"
 #include "app/check_json.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "bench/report.h"
 #include "bench/stress.h"
 
@@ -40,7 +41,7 @@ Runner add_stress(CLI::App& app) {
     double ray_scale = 1.0, budget = 2.0;
     uint64_t seed = 1;
     int threads = 0;
-    bool list = false;
+    bool list = false, quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -56,9 +57,10 @@ Runner add_stress(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.01, 3600.0));
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "threads (0 = all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--json", o->json, "write records to this JSON file");
+  add_threads_option(cmd, o->threads);
+  cmd->add_option("-o,--json", o->json, "write records to this JSON file (also when interrupted: complete false)");
   cmd->add_flag("--list", o->list, "list the scenarios and exit");
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
 
   return [o]() {
     if (o->list) {
@@ -72,6 +74,7 @@ Runner add_stress(CLI::App& app) {
     so.time_budget_s = o->budget;
     so.seed = o->seed;
     so.threads = o->threads;
+    InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
     std::printf("stress: %zu scenarios x %zu accelerators, reference %s, judge: exact oracle\n", so.scenarios.size(),
                 specs.size(), so.reference.c_str());
     std::printf("%-18s %-26s %-11s %9s %8s %10s %8s %8s %8s %8s %7s %6s %6s %6s %7s %9s\n", "scenario", "accel", "status",
@@ -79,7 +82,15 @@ Runner add_stress(CLI::App& app) {
                 "leaks", "leaks/M");
     std::fflush(stdout);
     bool failed = false;
+    ProgressLine progress("stress", !o->quiet && stderr_is_terminal());
+    so.stop = interrupt.flag();
+    size_t finished = 0;
+    so.on_start = [&](const std::string& scenario, const std::string& accel, size_t i, size_t n) {
+      progress.update(i, n, fmt::format("scenario {} ({}), {} records done", scenario, accel, finished));
+    };
     const auto records = run_stress(specs, so, [&](const StressRecord& r) {
+      ++finished;
+      progress.clear();
       std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.3g %8.3g %8.3g %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
                   r.scenario.c_str(), r.accel.c_str(), r.status.c_str(), r.triangles, r.rays, r.build_ms,
                   r.bytes / 1048576.0, r.mrays_per_s, r.embree_mrays_per_s, r.ratio,
@@ -96,7 +107,18 @@ Runner add_stress(CLI::App& app) {
       }
       recs.push_back(stress_record_json(r));
     }
-    if (!o->json.empty()) write_json_report(o->json, report_header("stress"), recs);
+    progress.clear();
+    const bool interrupted = interrupt.interrupted();
+    if (!o->json.empty()) {
+      nlohmann::json header = report_header("stress");
+      header["complete"] = !interrupted;
+      write_json_report(o->json, header, recs);
+    }
+    if (interrupted) {
+      std::fprintf(stderr, "raylab stress: interrupted: %zu finished records kept%s%s\n", records.size(),
+                   o->json.empty() ? "" : " in ", o->json.c_str());
+      return kExitInterrupted;
+    }
     std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
                 records.size(), n_failed);
     return failed ? kExitCheckFailed : 0;

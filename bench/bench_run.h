@@ -41,10 +41,12 @@ struct BenchRecord {
   double mrays_per_s = 0, mrays_min = 0, mrays_max = 0;
   double embree_mrays_per_s = 0, ratio_to_embree = 0;
   double embree_agreement = 1.0;  // fraction of rays answered like Embree (ties count as agreement)
-  double nodes_per_ray = 0, tris_per_ray = 0;
-  double sah_cost = 0;
-  size_t nodes = 0, leaves = 0;
+  double nodes_per_ray = 0, tris_per_ray = 0;  // NaN: not counted (Embree has no traversal counters)
+  double sah_cost = 0;                          // NaN: not reported by the structure
+  size_t nodes = 0, leaves = 0;                 // 0 with has_tree false: not reported (Embree)
   int max_depth = 0;
+  bool has_tree = true;
+  std::vector<double> trace_s;  // seconds of each timed repeat, in run order (raylab compare's test)
   std::map<std::string, double> extra;  // BuildStats::extra (structure-specific figures)
 
   nlohmann::json to_json() const;

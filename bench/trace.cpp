@@ -56,8 +56,9 @@ TraceTiming time_trace(const Accelerator& accel, const RaySet& set, int threads,
       times.push_back(t.seconds());
     }
   }
-  std::sort(times.begin(), times.end());
   TraceTiming timing;
+  timing.repeat_s = times;  // in run order, for significance tests between runs (raylab compare)
+  std::sort(times.begin(), times.end());
   timing.min_s = times.front();
   timing.max_s = times.back();
   const size_t m = times.size();

@@ -20,9 +20,9 @@ mkdir -p "$OUT/equal_time"
 case "$PRESET" in
   quick)
     SWEEP_SCENE="terrain:n=96"
-    SWEEP_ARGS=(--rays primary,random --threads 1 --size 256x256 --random-rays 65536 --repeats 5 --build-repeats 1)
+    SWEEP_ARGS=(--ray-sets primary,random --threads 1 --size 256x256 --rays 65536 --repeats 5 --build-repeats 1)
     SCALE="soup:n=1000,10000,100000,1000000"
-    SCALE_ARGS=(--rays primary,random --threads 1 --size 128x128 --random-rays 32768 --repeats 5 --build-repeats 1)
+    SCALE_ARGS=(--ray-sets primary,random --threads 1 --size 128x128 --rays 32768 --repeats 5 --build-repeats 1)
     SCALE_ACCELS="embree,bvh,kdtree,grid,hashgrid,grid2"
     VERIFY_SCENES=("cornell" "terrain:n=96" "sphereflake:level=2,segments=12")
     VERIFY_RAYS=16384
@@ -30,9 +30,9 @@ case "$PRESET" in
     ;;
   full)
     SWEEP_SCENE="terrain:n=256"
-    SWEEP_ARGS=(--rays primary,diffuse,random --threads 1 --size 512x512 --random-rays 262144 --repeats 7 --build-repeats 3)
+    SWEEP_ARGS=(--ray-sets primary,diffuse,random --threads 1 --size 512x512 --rays 262144 --repeats 7 --build-repeats 3)
     SCALE="soup:n=1000,10000,100000,1000000,10000000"
-    SCALE_ARGS=(--rays primary,random --threads 1 --size 256x256 --random-rays 65536 --repeats 5 --build-repeats 1)
+    SCALE_ARGS=(--ray-sets primary,random --threads 1 --size 256x256 --rays 65536 --repeats 5 --build-repeats 1)
     SCALE_ACCELS="embree,bvh,kdtree,grid,hashgrid,grid2"
     VERIFY_SCENES=("cornell" "terrain:n=256" "sphereflake:level=3" "city" "grass")
     VERIFY_RAYS=262144

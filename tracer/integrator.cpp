@@ -1,5 +1,6 @@
 #include "tracer/integrator.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -228,8 +229,12 @@ RenderResult render(const Scene& scene, const Accelerator& accel, const RenderSe
       const int d = ++done;
       if (settings.progress && timer.seconds() > 1.0) {
         std::lock_guard<std::mutex> lock(print_mutex);
-        std::fprintf(stderr, "\rrender: %3d%% (%d/%d tiles) %.1f s", 100 * d / tile_count, d, tile_count,
-                     timer.seconds());
+        // Rate and estimate from the tiles done so far (tiles cost alike on average).
+        const double elapsed = timer.seconds();
+        const double left = elapsed / d * (tile_count - d);
+        const double mrays = (rays.load() + shadow_rays.load()) / std::max(elapsed, 1e-9) * 1e-6;
+        std::fprintf(stderr, "\r\033[Krender: %3d%% (%d/%d tiles) %.1f s elapsed, %.2f Mrays/s, ~%.0f s left",
+                     100 * d / tile_count, d, tile_count, elapsed, mrays, left);
         std::fflush(stderr);
         printed = true;
       }

@@ -1,0 +1,275 @@
+// issue 19: one command-line vocabulary across subcommands, accurate error
+// messages, image outputs, and interruption with kept records. Each test
+// pins one rule that the command line broke before.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/scene_test_files.h"
+#include "tests/test_util.h"
+#include "tracer/image.h"
+
+namespace raylab {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+namespace fs = std::filesystem;
+
+nlohmann::json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+TEST(CliVocabulary, RaySetsNamesSetsAndRaysCountsRaysInVerifyAndBench) {
+  const auto dir = test::temp_dir("voc_rays");
+  const auto v = test::run_raylab("verify --scene soup:n=200 --accel bvh --ray-sets random --rays 700 -q --json " +
+                                  q(dir / "v.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.output;
+  const auto b = test::run_raylab("bench --scene soup:n=200 --accel embree,bvh --ray-sets random --rays 700 --repeats 1 "
+                                  "--threads 1 -q --json " + q(dir / "b.json"));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  for (const char* file : {"v.json", "b.json"}) {
+    const auto j = read_json(dir / file);
+    ASSERT_FALSE(j["records"].empty()) << file;
+    for (const auto& rec : j["records"]) {
+      EXPECT_EQ(rec["ray_set"], "random") << file;
+      EXPECT_EQ(rec["rays"], 700) << file;
+    }
+  }
+  // A set name given to --rays (the old bench meaning) is answered with the right option.
+  for (const char* cmd : {"verify", "bench"}) {
+    const auto r = test::run_raylab(std::string(cmd) + " --rays primary");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("--ray-sets")) << cmd;
+    EXPECT_THAT(r.output, Not(HasSubstr("not in range"))) << cmd;
+  }
+}
+
+TEST(CliVocabulary, EveryScenedCommandTakesAPositionalScene) {
+  const auto dir = test::temp_dir("voc_positional");
+  struct Case {
+    std::string args, expect;
+  };
+  const std::vector<Case> cases = {
+      {"info soup:n=123", "triangles  123"},
+      {"render soup:n=123 --spp 1 --size 8x8 -q -o " + q(dir / "r.png"), "123 triangles"},
+      {"verify soup:n=123 --accel bvh --ray-sets random --rays 100 -q", "soup:n=123 (123 triangles)"},
+      {"bench soup:n=123 --accel embree --ray-sets random --rays 100 --repeats 1 --threads 1 -q", "soup:n=123 (123 triangles)"},
+  };
+  for (const auto& c : cases) {
+    const auto r = test::run_raylab(c.args);
+    EXPECT_EQ(r.exit_code, 0) << c.args << "\n" << r.output;
+    EXPECT_THAT(r.output, HasSubstr(c.expect)) << c.args;
+  }
+  // Both forms at once: one message naming the two scenes, not CLI11's "--scene excludes scene".
+  for (const char* cmd : {"render", "verify", "info"}) {
+    const auto r = test::run_raylab(std::string(cmd) + " soup:n=5 --scene cornell");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("not both")) << cmd;
+    EXPECT_THAT(r.output, HasSubstr("soup:n=5")) << cmd;
+    EXPECT_THAT(r.output, Not(HasSubstr("excludes"))) << cmd;
+  }
+}
+
+TEST(CliVocabulary, ThreadsZeroMeansAllCoresInEveryCommand) {
+  const auto dir = test::temp_dir("voc_threads");
+  const auto b = test::run_raylab("bench --scene soup:n=100 --accel embree --ray-sets random --rays 200 --repeats 1 "
+                                  "--threads 0 -q --json " + q(dir / "b.json"));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  const auto j = read_json(dir / "b.json");
+  ASSERT_EQ(j["records"].size(), 1u);
+  EXPECT_EQ(j["records"][0]["threads"].get<int>(), static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  for (const std::string& args : {"render --spp 1 --size 8x8 -q --threads 0 -o " + q(dir / "r.png"),
+                                 std::string("verify --accel bvh --rays 100 --threads 0 -q"),
+                                 std::string("stress --scenario single --accel bvh --threads 0 -q --ray-scale 0.01")}) {
+    const auto r = test::run_raylab(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+  }
+  for (const char* cmd : {"render", "verify", "stress", "bench"}) {
+    const auto r = test::run_raylab(std::string(cmd) + " --threads -2");
+    EXPECT_EQ(r.exit_code, 2) << cmd << r.output;
+    EXPECT_THAT(r.output, HasSubstr("thread count")) << cmd;
+  }
+}
+
+TEST(CliVocabulary, ShortOptionsWhereUsersExpectThem) {
+  const auto dir = test::temp_dir("voc_short");
+  // pbrt/Mitsuba habits: -o output, -s samples, -t threads, -q quiet.
+  const auto r = test::run_raylab("render cornell -s 2 -t 1 -q --size 12x10 -o " + q(dir / "c.pfm"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image img = read_pfm((dir / "c.pfm").string());
+  EXPECT_EQ(img.width, 12);
+  EXPECT_EQ(img.height, 10);
+  const auto v = test::run_raylab("verify cornell --accel bvh --rays 50 -t 1 -q -o " + q(dir / "v.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.output;
+  EXPECT_EQ(read_json(dir / "v.json")["records"].size(), 2u);
+  const auto b = test::run_raylab("bench cornell --accel embree --ray-sets random --rays 50 --repeats 1 -t 1 -q -o " +
+                                  q(dir / "b.json"));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  EXPECT_EQ(read_json(dir / "b.json")["records"].size(), 1u);
+}
+
+TEST(CliVocabulary, ErrorsPointToTheSubcommandsOwnHelp) {
+  for (const char* cmd : {"render", "verify", "stress", "bench", "info"}) {
+    const auto r = test::run_raylab(std::string(cmd) + " --frobnicate");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr(std::string("raylab ") + cmd + ": error:")) << cmd;
+    EXPECT_THAT(r.output, HasSubstr(std::string("see raylab ") + cmd + " --help")) << cmd;
+  }
+  // Value errors found after parsing point there too.
+  const auto r = test::run_raylab("render --size 3by4");
+  EXPECT_THAT(r.output, HasSubstr("see raylab render --help")) << r.output;
+}
+
+TEST(CliVocabulary, MessagesSayWhatIsWrong) {
+  const auto dir = test::temp_dir("voc_messages");
+  // `-o` is an option now, so the image name is not taken for a second scene.
+  const auto o = test::run_raylab("render --scene cornell -s 1 --size 8x8 -q -o " + q(dir / "x.png"));
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_TRUE(fs::exists(dir / "x.png"));
+  // render takes one accelerator: 'all' and lists are refused as such, not as unknown names.
+  for (const char* accel : {"all", "bvh,kdtree"}) {
+    const auto r = test::run_raylab(std::string("render --accel ") + accel + " -o " + q(dir / "y.png"));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("render uses one accelerator")) << accel;
+    EXPECT_THAT(r.output, Not(HasSubstr("unknown accelerator"))) << accel;
+  }
+  EXPECT_FALSE(fs::exists(dir / "y.png"));
+}
+
+TEST(CliOutput, ExrIsLinearFloatAndExtensionsIgnoreCase) {
+  const auto dir = test::temp_dir("out_exr");
+  const std::string common = "render cornell -s 2 --size 20x16 -t 1 -q ";
+  ASSERT_EQ(test::run_raylab(common + "-o " + q(dir / "a.pfm")).exit_code, 0);
+  const auto e = test::run_raylab(common + "-o " + q(dir / "a.EXR"));
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  const Image pfm = read_pfm((dir / "a.pfm").string());
+  const Image exr = read_exr((dir / "a.EXR").string());
+  ASSERT_EQ(exr.width, 20);
+  ASSERT_EQ(exr.height, 16);
+  EXPECT_EQ(exr.rgb, pfm.rgb);  // same deterministic render, stored as 32-bit floats
+  EXPECT_GT(exr.mean().sum(), 0.0f);
+  const auto p = test::run_raylab(common + "-o " + q(dir / "b.PNG"));
+  EXPECT_EQ(p.exit_code, 0) << p.output;
+  std::ifstream png(dir / "b.PNG", std::ios::binary);
+  std::string magic(4, '\0');
+  png.read(magic.data(), 4);
+  EXPECT_EQ(magic.substr(1, 3), "PNG");
+  const auto bad = test::run_raylab(common + "-o " + q(dir / "c.tiff"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.output, HasSubstr(".exr"));
+}
+
+TEST(CliOutput, DefaultOutputNameIsTheScenesShortName) {
+  const auto dir = test::temp_dir("out_default");
+  const std::string mesh = test::write_file(dir, "little_tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const auto r = test::run_raylab_in(dir, "render " + q(mesh) + " -s 1 --size 8x8 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "little_tri.png")) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("1 triangle ")) << r.output;  // not "1 triangles"
+  const auto s = test::run_raylab_in(dir, "render sphereflake:level=1 -s 1 --size 8x8 -q");
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "sphereflake_level_1.png")) << s.output;
+}
+
+// Starts raylab with stdout on a pipe; returns its pid and the read end.
+std::pair<pid_t, int> spawn_raylab(const std::vector<std::string>& args) {
+  int fds[2];
+  if (pipe(fds) != 0) return {-1, -1};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(fds[1], 1);
+    close(fds[0]);
+    close(fds[1]);
+    std::vector<char*> argv;
+    std::string bin = RAYLAB_BINARY;
+    argv.push_back(bin.data());
+    std::vector<std::string> copy = args;
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(RAYLAB_BINARY, argv.data());
+    _exit(127);
+  }
+  close(fds[1]);
+  return {pid, fds[0]};
+}
+
+// Reads the child's stdout until `marker` appears (or EOF); returns what was read.
+std::string read_until(int fd, const std::string& marker) {
+  std::string got;
+  char buf[4096];
+  while (got.find(marker) == std::string::npos) {
+    const ssize_t n = read(fd, buf, sizeof buf);
+    if (n <= 0) break;
+    got.append(buf, static_cast<size_t>(n));
+  }
+  return got;
+}
+
+int interrupt_and_wait(pid_t pid, int fd) {
+  kill(pid, SIGINT);
+  char buf[4096];
+  while (read(fd, buf, sizeof buf) > 0) {
+  }
+  close(fd);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(CliInterrupt, CtrlCInVerifyKeepsFinishedRecordsAndExits130) {
+  const auto dir = test::temp_dir("int_verify");
+  const auto json = dir / "v.json";
+  // Many slow brute-force records: far from done when the signal comes.
+  std::vector<std::string> args = {"verify", "soup:n=5000", "--ray-sets", "primary,random", "--rays", "2048",
+                                   "--accel", "bvh,brute,brute,brute,brute,brute,brute,brute", "-t", "1", "-o", json.string()};
+  auto [pid, fd] = spawn_raylab(args);
+  ASSERT_GT(pid, 0);
+  const std::string head = read_until(fd, "result");  // the table header: the handler is installed
+  ASSERT_THAT(head, HasSubstr("result"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_EQ(interrupt_and_wait(pid, fd), 130);
+  const auto j = read_json(json);
+  EXPECT_EQ(j["complete"], false);
+  EXPECT_LT(j["records"].size(), 16u);
+  for (const auto& rec : j["records"]) EXPECT_EQ(rec["raylab_wrong"], 0);
+}
+
+TEST(CliInterrupt, CtrlCInStressKeepsFinishedRecordsAndExits130) {
+  const auto dir = test::temp_dir("int_stress");
+  const auto json = dir / "s.json";
+  auto [pid, fd] = spawn_raylab({"stress", "--accel", "bvh", "--ray-scale", "0.1", "-t", "1", "-o", json.string()});
+  ASSERT_GT(pid, 0);
+  // The first finished row (the header ends with "leaks/M").
+  const std::string head = read_until(fd, "leaks/M\n");
+  std::string rows = read_until(fd, "\n");
+  ASSERT_FALSE(rows.empty()) << head;
+  EXPECT_EQ(interrupt_and_wait(pid, fd), 130);
+  const auto j = read_json(json);
+  EXPECT_EQ(j["complete"], false);
+  EXPECT_GE(j["records"].size(), 1u);
+  const auto full = test::run_raylab("stress --list");
+  EXPECT_LT(j["records"].size(), 2 * static_cast<size_t>(std::count(full.output.begin(), full.output.end(), '\n')));
+}
+
+TEST(CliNotes, SecondarySetsThatHoldFewerRaysSaySo) {
+  // Half the primary rays of this view miss the single quad, so diffuse and shadow sets are smaller.
+  const auto r = test::run_raylab("verify soup:n=50 --accel bvh --ray-sets primary,diffuse,shadow --rays 2000 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("note: ray set 'diffuse' holds"));
+  EXPECT_THAT(r.output, HasSubstr("primary hits"));
+  EXPECT_THAT(r.output, Not(HasSubstr("note: ray set 'primary'")));
+}
+
+}  // namespace
+}  // namespace raylab
