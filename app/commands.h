@@ -25,6 +25,7 @@ Runner add_bench(CLI::App& app);
 Runner add_info(CLI::App& app);
 Runner add_scenes(CLI::App& app);
 Runner add_accels(CLI::App& app);
+Runner add_compare(CLI::App& app);
 
 // "512x384" -> (512, 384); throws CLI::ValidationError style std::invalid_argument.
 std::pair<int, int> parse_size(const std::string& text);

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   add(add_info, "info");
   add(add_scenes, "scenes");
   add(add_accels, "accels");
+  add(add_compare, "compare");
 
   std::string names;
   bool known = false;
