@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <cmath>
 #include <fstream>
 #include <thread>
 
@@ -269,6 +271,74 @@ TEST(CliNotes, SecondarySetsThatHoldFewerRaysSaySo) {
   EXPECT_THAT(r.output, HasSubstr("note: ray set 'diffuse' holds"));
   EXPECT_THAT(r.output, HasSubstr("primary hits"));
   EXPECT_THAT(r.output, Not(HasSubstr("note: ray set 'primary'")));
+}
+
+}  // namespace
+}  // namespace raylab
+
+namespace raylab {
+namespace {
+
+// Bounding box (x0, y0, x1, y1) of the pixels that differ from the sky colour.
+std::array<int, 4> object_extent(const Image& img, float sky) {
+  std::array<int, 4> e = {img.width, img.height, -1, -1};
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (std::fabs(img.pixel(x, y).x() - sky) > 1e-4f) {
+        e[0] = std::min(e[0], x);
+        e[1] = std::min(e[1], y);
+        e[2] = std::max(e[2], x);
+        e[3] = std::max(e[3], y);
+      }
+  return e;
+}
+
+TEST(CliCamera, UpAxisStandsAZUpMeshUpright) {
+  const auto dir = test::temp_dir("cam_up");
+  // A post 8 units tall along +z (as Blender, STL and DXF files store "up").
+  std::string obj;
+  for (int i = 0; i < 8; ++i) {
+    const float x = (i & 1) ? 0.5f : -0.5f, y = (i & 2) ? 0.5f : -0.5f, z = (i & 4) ? 8.0f : 0.0f;
+    obj += "v " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+  }
+  obj += "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n";
+  const std::string mesh = test::write_file(dir, "post.obj", obj);
+  const std::string common = "render " + q(mesh) + " -s 1 --size 64x64 -t 1 -q --background 1 ";
+  ASSERT_EQ(test::run_raylab(common + "-o " + q(dir / "y.pfm")).exit_code, 0);
+  const auto r = test::run_raylab(common + "--up z -o " + q(dir / "z.pfm"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto ey = object_extent(read_pfm((dir / "y.pfm").string()), 1.0f);
+  const auto ez = object_extent(read_pfm((dir / "z.pfm").string()), 1.0f);
+  const int wy = ey[2] - ey[0], hy = ey[3] - ey[1], wz = ez[2] - ez[0], hz = ez[3] - ez[1];
+  ASSERT_GT(wz, 0);
+  EXPECT_GT(hz, 3 * wz) << "--up z: the post should stand upright";
+  EXPECT_LT(hy, 3 * wy) << "y up: the post lies on its side";
+  EXPECT_EQ(test::run_raylab(common + "--up w -o " + q(dir / "w.pfm")).exit_code, 2);
+}
+
+TEST(CliCamera, CameraAndBackgroundOverrideTheScene) {
+  const auto dir = test::temp_dir("cam_override");
+  const std::string common = "render soup:n=20 -s 1 --size 32x32 -t 1 -q ";
+  ASSERT_EQ(test::run_raylab(common + "--background 0.25,0.5,1 -o " + q(dir / "bg.pfm")).exit_code, 0);
+  const Image bg = read_pfm((dir / "bg.pfm").string());
+  // A camera looking away from everything sees only the background.
+  const auto away = test::run_raylab(common + "--background 0.25,0.5,1 --camera from=0,0,100,at=0,0,200,fov=10 -o " +
+                                     q(dir / "away.pfm"));
+  ASSERT_EQ(away.exit_code, 0) << away.output;
+  const Image img = read_pfm((dir / "away.pfm").string());
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) ASSERT_TRUE(img.pixel(x, y).isApprox(Vec3f(0.25f, 0.5f, 1.0f), 1e-5f)) << x << "," << y;
+  EXPECT_NE(bg.rgb, img.rgb);
+  for (const auto& [arg, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--camera from=1,2", "three numbers"},
+           {"--camera eye=0,0,1", "unknown key 'eye'"},
+           {"--camera from=0,0,0,at=0,0,0", "--camera"},
+           {"--background -1", "non-negative"}}) {
+    const auto r = test::run_raylab(common + arg + " -o " + q(dir / "bad.png"));
+    EXPECT_EQ(r.exit_code, 2) << arg << r.output;
+    EXPECT_THAT(r.output, HasSubstr(message)) << arg;
+  }
+  EXPECT_FALSE(fs::exists(dir / "bad.png"));
 }
 
 }  // namespace
