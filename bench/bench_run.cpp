@@ -229,6 +229,14 @@ std::string format_bench_table(const std::vector<BenchRecord>& records) {
   return s;
 }
 
+std::string depth_cap_warning(const BuildStats& stats) {
+  const auto it = stats.extra.find("max_depth_limit");
+  if (it == stats.extra.end() || stats.max_depth < static_cast<int>(it->second)) return {};
+  return fmt::format("the tree reached its depth cap ({} levels): deeper splits were refused and leaves may be larger "
+                     "than the cost model wanted (raise max_depth, up to 64)",
+                     static_cast<int>(it->second));
+}
+
 std::string format_build_summary(const std::vector<BenchRecord>& records) {
   std::string s;
   std::string last;
@@ -242,6 +250,11 @@ std::string format_build_summary(const std::vector<BenchRecord>& records) {
                     : std::string(", nodes n/a, leaves n/a, depth n/a (not reported by the structure)");
     for (const auto& [k, v] : r.extra) s += fmt::format(", {} {:.4g}", k, v);
     s += "\n";
+    BuildStats st;
+    st.max_depth = r.max_depth;
+    st.extra = r.extra;
+    const std::string warning = depth_cap_warning(st);
+    if (!warning.empty()) s += fmt::format("warning: {}: {}\n", r.accel, warning);
   }
   return s;
 }

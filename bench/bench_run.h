@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accel/accelerator.h"
 #include "scenes/scene.h"
 
 namespace raylab {
@@ -67,6 +68,10 @@ std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& a
 
 // CSV with one row per record (the flat fields of to_json, extra omitted).
 std::string bench_csv(const std::vector<BenchRecord>& records);
+
+// Non-empty when a depth-capped build (k-d tree: extra "max_depth_limit")
+// reached its cap: leaves may then hold more triangles than the cost model wanted.
+std::string depth_cap_warning(const BuildStats& stats);
 
 // Fixed-width table for the terminal.
 std::string format_bench_table(const std::vector<BenchRecord>& records);

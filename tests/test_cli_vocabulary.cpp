@@ -10,6 +10,8 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <set>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -339,6 +341,50 @@ TEST(CliCamera, CameraAndBackgroundOverrideTheScene) {
     EXPECT_THAT(r.output, HasSubstr(message)) << arg;
   }
   EXPECT_FALSE(fs::exists(dir / "bad.png"));
+}
+
+}  // namespace
+}  // namespace raylab
+
+namespace raylab {
+namespace {
+
+TEST(CliNumbers, NotApplicableFiguresShowNaAndListingsAlign) {
+  // Embree reports no tree: n/a, not "nodes 0" or "sah nan".
+  const auto info = test::run_raylab("info soup:n=100 --accel embree,bvh");
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_THAT(info.output, Not(HasSubstr("nan")));
+  EXPECT_THAT(info.output, HasSubstr("sah_cost   n/a"));
+  EXPECT_THAT(info.output, HasSubstr("nodes      n/a"));
+  const auto bench = test::run_raylab("bench soup:n=100 --accel embree,bvh --ray-sets random --rays 100 --repeats 1 -t 1 -q");
+  ASSERT_EQ(bench.exit_code, 0) << bench.output;
+  EXPECT_THAT(bench.output, Not(HasSubstr("sah nan")));
+  EXPECT_THAT(bench.output, HasSubstr("sah n/a, nodes n/a"));
+  EXPECT_THAT(bench.output, ::testing::ContainsRegex("embree +random +1 .* n/a +n/a\n"));
+  // raylab accels: every parameter's help text starts in the same column.
+  const auto accels = test::run_raylab("accels");
+  std::istringstream lines(accels.output);
+  std::set<size_t> columns;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("    ", 0) != 0) continue;
+    const auto gap = line.find("  ", 4);
+    ASSERT_NE(gap, std::string::npos) << line;
+    columns.insert(line.find_first_not_of(' ', gap));
+  }
+  EXPECT_EQ(columns.size(), 1u) << accels.output;
+}
+
+TEST(CliNumbers, DepthCappedKdTreeWarnsAndOneTriangleIsSingular) {
+  const auto capped = test::run_raylab("info soup:n=3000 --accel kdtree:max_depth=4");
+  ASSERT_EQ(capped.exit_code, 0) << capped.output;
+  EXPECT_THAT(capped.output, HasSubstr("warning: kdtree:max_depth=4: the tree reached its depth cap (4 levels)"));
+  const auto free = test::run_raylab("info cornell --accel kdtree");  // depth 14 of 15
+  EXPECT_THAT(free.output, Not(HasSubstr("depth cap")));
+  const auto bench = test::run_raylab("bench soup:n=3000 --accel kdtree:max_depth=4 --ray-sets random --rays 100 --repeats 1 -t 1 -q");
+  EXPECT_THAT(bench.output, HasSubstr("warning: kdtree:max_depth=4: the tree reached its depth cap"));
+  const auto one = test::run_raylab("verify soup:n=1 --accel bvh --rays 10 -q");
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_THAT(one.output, HasSubstr("(1 triangle)"));
 }
 
 }  // namespace
