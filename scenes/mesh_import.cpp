@@ -83,6 +83,34 @@ std::string explain_assimp_error(std::string why) {
   return why;
 }
 
+// The line of the first whitespace-delimited occurrence of `token` in a text
+// file (0 if absent), so a "malformed number" names where to look: Assimp's
+// text readers report the token but not its line.
+uint64_t line_of_token(const std::string& path, const std::string& token) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  for (uint64_t n = 1; std::getline(in, line) && n < (uint64_t{1} << 32); ++n) {
+    for (size_t at = line.find(token); at != std::string::npos; at = line.find(token, at + 1)) {
+      const bool starts = at == 0 || std::isspace(static_cast<unsigned char>(line[at - 1]));
+      const size_t end = at + token.size();
+      const bool ends = end == line.size() || std::isspace(static_cast<unsigned char>(line[end]));
+      if (starts && ends) return n;
+    }
+  }
+  return 0;
+}
+
+std::string explain_assimp_error_in(const std::string& path, const std::string& why) {
+  std::string text = explain_assimp_error(why);
+  static const std::regex number(R"(^malformed number '([^']+)'$)");
+  std::smatch m;
+  if (std::regex_match(text, m, number)) {
+    const uint64_t line = line_of_token(path, m[1].str());
+    if (line > 0) text += fmt::format(" at line {}", line);
+  }
+  return text;
+}
+
 struct Instance {
   const aiMesh* mesh;
   aiMatrix4x4 xf;
@@ -126,7 +154,9 @@ void import_into_memfd(const std::string& path, int fd) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* ai =
       importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType);
-  if (!ai) throw SceneLoadError(fmt::format("{}: cannot load mesh: {}", path, explain_assimp_error(importer.GetErrorString())));
+  if (!ai)
+    throw SceneLoadError(
+        fmt::format("{}: cannot load mesh: {}", path, explain_assimp_error_in(path, importer.GetErrorString())));
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE || !ai->mRootNode)
     throw SceneLoadError(fmt::format("{}: file is incomplete (no mesh data)", path));
 

@@ -389,3 +389,36 @@ TEST(CliNumbers, DepthCappedKdTreeWarnsAndOneTriangleIsSingular) {
 
 }  // namespace
 }  // namespace raylab
+
+namespace raylab {
+namespace {
+
+TEST(CliMessages, MalformedNumberNamesItsLine) {
+  const auto dir = test::temp_dir("msg_nff");
+  // An NFF cone record whose numbers are followed by a texture name (as in Assimp's NFF/cone.nff).
+  const std::string nff = test::write_file(dir, "cone.nff", "c 0 0 0 1 1 0 0 2\ncantfindme.png 2\n");
+  const auto r = test::run_raylab("info " + q(nff));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("malformed number 'cantfindme.png' at line 2"));
+}
+
+TEST(CliMessages, Utf16TextFilesOfEveryFormatAreNamedAsSuch) {
+  const auto dir = test::temp_dir("msg_utf16");
+  auto utf16le = [](const std::string& ascii) {
+    std::string out = "\xFF\xFE";
+    for (char c : ascii) out += std::string(1, c) + std::string(1, '\0');
+    return out;
+  };
+  const std::string dae = "<?xml version=\"1.0\" encoding=\"utf-16\"?>\n<COLLADA version=\"1.4.1\"></COLLADA>\n";
+  const std::string ac = "AC3Db\nMATERIAL \"\" rgb 1 1 1 amb 0.2 0.2 0.2 emis 0 0 0 spec 0 0 0 shi 0 trans 0\nOBJECT world\nkids 0\n";
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{{"box.dae", dae}, {"box.ac", ac}}) {
+    const std::string path = test::write_file(dir, name, utf16le(text));
+    const auto r = test::run_raylab("info " + q(path));
+    EXPECT_EQ(r.exit_code, 2) << name << r.output;
+    EXPECT_THAT(r.output, HasSubstr("UTF-16 text")) << name;
+    EXPECT_THAT(r.output, Not(HasSubstr("XML"))) << name;
+  }
+}
+
+}  // namespace
+}  // namespace raylab
