@@ -422,3 +422,35 @@ TEST(CliMessages, Utf16TextFilesOfEveryFormatAreNamedAsSuch) {
 
 }  // namespace
 }  // namespace raylab
+
+#include "scenes/mesh_import.h"
+
+namespace raylab {
+namespace {
+
+TEST(CliCamera, GltfCameraIsHonoured) {
+  const auto dir = test::temp_dir("cam_gltf");
+  test::GltfPrimitive tri;
+  tri.xyz = {-1, 0, 0, 1, 0, 0, 0, 1, 0};
+  tri.indices = {0, 1, 2};
+  std::string buffer;
+  nlohmann::json doc = test::gltf_document({tri}, buffer);
+  doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + test::base64(buffer);
+  doc["cameras"] = nlohmann::json::array({{{"type", "perspective"},
+                                           {"perspective", {{"yfov", 0.6}, {"aspectRatio", 1.0}, {"znear", 0.01}}}}});
+  // Placed at (4, 0.5, 0), turned 90 degrees about +y: it looks along -x, at the triangle.
+  doc["nodes"].push_back({{"camera", 0}, {"translation", {4, 0.5, 0}}, {"rotation", {0, 0.70710678, 0, 0.70710678}}});
+  doc["scenes"][0]["nodes"].push_back(doc["nodes"].size() - 1);
+  const std::string path = test::write_file(dir, "cam.gltf", doc.dump());
+  const Scene s = load_mesh_file(path);
+  EXPECT_TRUE(s.view.from.isApprox(Vec3f(4, 0.5f, 0), 1e-4f)) << s.view.from.transpose();
+  const Vec3f dir_seen = (s.view.at - s.view.from).normalized();
+  EXPECT_TRUE(dir_seen.isApprox(Vec3f(-1, 0, 0), 1e-4f)) << dir_seen.transpose();
+  EXPECT_NEAR(s.view.fov_deg, 0.6 * 180 / 3.14159265, 0.01);
+  // Without a camera: the default framing, unchanged.
+  const std::string plain = test::write_file(dir, "plain.gltf", test::gltf_embedded({tri}));
+  EXPECT_FALSE(load_mesh_file(plain).view.from.isApprox(Vec3f(4, 0.5f, 0), 1e-2f));
+}
+
+}  // namespace
+}  // namespace raylab
