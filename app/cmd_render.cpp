@@ -95,6 +95,7 @@ Runner add_render(CLI::App& app) {
     const double load_ms = load.ms();
     if (!o->up.empty()) apply_up_axis(o->up, scene);
     if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
+    if (!o->up.empty() || !o->camera.empty()) aim_key_light(scene);  // keep the light where it was, relative to the camera
     if (!o->background.empty()) scene.background = background;
     RenderSettings rs;
     rs.width = scene.view.width;

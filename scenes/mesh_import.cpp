@@ -492,7 +492,16 @@ Scene load_mesh_file(const std::string& path) {
   // The file's own camera when it has one (NFF's viewpoint, a glTF camera), else a framing of the bounds.
   s.view = nff_view ? *nff_view : file_camera ? *file_camera : frame_bounds(s.bounds());
   apply_sibling_view_file(path, s.view);
-  s.background = s.has_emitters() ? Vec3f::Constant(0.05f) : Vec3f::Constant(1.0f);
+  if (s.has_emitters()) {
+    s.background = Vec3f::Constant(0.05f);
+  } else {
+    // A dim sky plus a key light (irradiance pi: a white Lambertian surface
+    // facing it reflects radiance 1) gives shading and shadows; a white sky
+    // alone made grey objects flat silhouettes.
+    s.background = Vec3f::Constant(0.3f);
+    s.key_light = Vec3f::Constant(3.14159265f);
+    aim_key_light(s);
+  }
   return s;
 }
 

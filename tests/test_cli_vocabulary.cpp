@@ -454,3 +454,38 @@ TEST(CliCamera, GltfCameraIsHonoured) {
 
 }  // namespace
 }  // namespace raylab
+
+namespace raylab {
+namespace {
+
+TEST(CliCamera, PlainMeshesGetAKeyLightWithShadowsUnderADimSky) {
+  const auto dir = test::temp_dir("cam_key");
+  // A ground quad and a cube floating above it.
+  std::string obj = "v -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\n";
+  for (int i = 0; i < 8; ++i)
+    obj += "v " + std::to_string((i & 1) ? 1 : -1) + " " + std::to_string((i & 2) ? 3 : 1) + " " +
+           std::to_string((i & 4) ? 1 : -1) + "\n";
+  obj += "f 1 4 3 2\nf 5 7 8 6\nf 9 10 12 11\nf 5 6 10 9\nf 7 11 12 8\nf 5 9 11 7\nf 6 8 12 10\n";
+  const std::string mesh = test::write_file(dir, "scene.obj", obj);
+  const Scene s = load_mesh_file(mesh);
+  EXPECT_GT(s.key_light.minCoeff(), 0.0f);
+  EXPECT_LT(s.background.maxCoeff(), 0.5f) << "a dim sky: objects stand out against it";
+  EXPECT_GT(s.key_light_dir.dot(s.view.up.normalized()), 0.5f) << "the light comes from above";
+  const auto r = test::run_raylab("render " + q(mesh) + " -s 16 --size 48x48 -t 1 -q -o " + q(dir / "k.pfm"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image img = read_pfm((dir / "k.pfm").string());
+  // The ground has lit pixels and pixels in the cube's shadow: several times darker.
+  float lo = 1e9f, hi = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float v = img.pixel(x, y).x();
+      if (std::fabs(v - s.background.x()) < 1e-4f) continue;  // sky
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  EXPECT_GT(hi, 3 * lo) << "no shadow or shading contrast: lo " << lo << " hi " << hi;
+  EXPECT_LT(hi, 1.0f) << "washed out";
+}
+
+}  // namespace
+}  // namespace raylab

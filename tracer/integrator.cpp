@@ -159,6 +159,16 @@ class TileRenderer {
           }
         }
 
+        // The key light (a distant "sun"): a shadow ray towards it.
+        if (scene_.key_light.maxCoeff() > 0.0f) {
+          const float cos_s = n.dot(scene_.key_light_dir);
+          if (cos_s > 0.0f) {
+            shadow.emplace_back(origin, scene_.key_light_dir);
+            shadow_contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(scene_.key_light) * cos_s);
+            shadow_path.push_back(active[k]);
+          }
+        }
+
         // Continue the path by cosine-weighted sampling.
         const float b1 = path.rng.uniform(), b2 = path.rng.uniform();
         float pdf;
