@@ -37,7 +37,7 @@ nlohmann::json stress_record_json(const StressRecord& r) {
 
 Runner add_stress(CLI::App& app) {
   struct Opts {
-    std::string accel = "all", scenario = "all", json;
+    std::string accel = "all", scenario, positional_scenario, json;
     double ray_scale = 1.0, budget = 2.0;
     uint64_t seed = 1;
     int threads = 0;
@@ -48,8 +48,10 @@ Runner add_stress(CLI::App& app) {
       "stress", "run named failure scenarios (precision, degenerate scenes, watertightness, ray corner cases) "
                 "against every accelerator, Embree (robust) as the reference, the exact oracle as the judge");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
-  cmd->add_option("--scenario", o->scenario, "scenario names or prefixes, comma separated, or 'all' (see --list)")
-      ->capture_default_str();
+  // Stress runs named scenarios rather than scenes: they take the positional place a scene has elsewhere.
+  cmd->add_option("scenario", o->positional_scenario,
+                  "scenario names or prefixes, comma separated, or 'all' (the default; see --list)");
+  cmd->add_option("--scenario", o->scenario, "the scenarios, as the positional argument");
   cmd->add_option("--ray-scale", o->ray_scale, "multiply every scenario's ray count")
       ->capture_default_str()
       ->check(CLI::Range(1e-4, 100.0));
@@ -69,14 +71,21 @@ Runner add_stress(CLI::App& app) {
     }
     const auto specs = expand_accelerator_list(o->accel);
     StressOptions so;
-    so.scenarios = expand_stress_scenarios(o->scenario);
+    if (!o->scenario.empty() && !o->positional_scenario.empty())
+      throw std::invalid_argument(fmt::format("stress takes its scenarios either positionally or with --scenario, not "
+                                              "both (got '{}' and '{}')",
+                                              o->positional_scenario, o->scenario));
+    so.scenarios = expand_stress_scenarios(!o->positional_scenario.empty() ? o->positional_scenario
+                                           : !o->scenario.empty()         ? o->scenario
+                                                                          : std::string("all"));
     so.ray_scale = o->ray_scale;
     so.time_budget_s = o->budget;
     so.seed = o->seed;
     so.threads = o->threads;
     InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
-    std::printf("stress: %zu scenarios x %zu accelerators, reference %s, judge: exact oracle\n", so.scenarios.size(),
-                specs.size(), so.reference.c_str());
+    std::printf("stress: %zu scenario%s x %zu accelerator%s, reference %s, judge: exact oracle\n",
+                so.scenarios.size(), so.scenarios.size() == 1 ? "" : "s", specs.size(), specs.size() == 1 ? "" : "s",
+                so.reference.c_str());
     std::printf("%-18s %-26s %-11s %9s %8s %10s %8s %8s %8s %8s %7s %6s %6s %6s %7s %9s\n", "scenario", "accel", "status",
                 "tris", "rays", "build ms", "MiB", "Mrays/s", "embree", "ratio", "disagr", "ties", "rl_wr", "em_wr",
                 "leaks", "leaks/M");

@@ -75,6 +75,10 @@ TEST(CliVocabulary, EveryScenedCommandTakesAPositionalScene) {
     EXPECT_EQ(r.exit_code, 0) << c.args << "\n" << r.output;
     EXPECT_THAT(r.output, HasSubstr(c.expect)) << c.args;
   }
+  // stress runs scenarios, not scenes: they take the positional place.
+  const auto st = test::run_raylab("stress single --accel bvh -q --ray-scale 0.01");
+  EXPECT_EQ(st.exit_code, 0) << st.output;
+  EXPECT_THAT(st.output, HasSubstr("stress: 1 scenario x 1 accelerator,"));
   // Both forms at once: one message naming the two scenes, not CLI11's "--scene excludes scene".
   for (const char* cmd : {"render", "verify", "info"}) {
     const auto r = test::run_raylab(std::string(cmd) + " soup:n=5 --scene cornell");
