@@ -9,6 +9,19 @@
 //  - Invalid rays (see ray_is_valid) report a miss / not occluded.
 //  - When `stats` is non-null the instrumented kernel runs and adds its
 //    per-ray counters to *stats (the uninstrumented kernel does no counting).
+//
+// Optional per-batch preparation (timed = traversal only): a structure that
+// traces rays in its own layout (Embree's RTCRayHit arrays and SOA packets,
+// say) converts a whole ray set once in prepare(), outside any timed region;
+// the benchmark reports that cost on its own (`prepare_ms`) and times only
+// intersect_prepared()/occluded_prepared(). These receive the prepared object
+// and the sub-range a thread traces: `rays` is rays_given_to_prepare[begin,
+// begin + rays.size()) and results go to hits/occluded[0, rays.size()).
+// A prepared object is read-only while tracing (several threads may trace
+// disjoint sub-ranges at once) and is valid for the ray span it was made
+// from. Structures without a preparation step return nullptr from prepare()
+// and the *_prepared calls forward to intersect()/occluded(), so they behave
+// exactly as without preparation. Results are identical with and without it.
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -49,6 +62,11 @@ struct TraversalStats {
   }
 };
 
+// A structure's own form of a ray set (see prepare()); opaque to callers.
+struct PreparedRays {
+  virtual ~PreparedRays() = default;
+};
+
 class Accelerator {
  public:
   virtual ~Accelerator() = default;
@@ -66,6 +84,24 @@ class Accelerator {
   // Any hit within [tmin, tmax]: occluded[i] = 1 when rays[i] hits something.
   virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded,
                         TraversalStats* stats = nullptr) const = 0;
+
+  // Converts `rays` (all of a ray set) into this structure's layout, or
+  // returns nullptr when it traces our Ray directly. `occlusion`: the set is
+  // traced with occluded_prepared(), else with intersect_prepared().
+  virtual std::unique_ptr<PreparedRays> prepare(std::span<const Ray> /*rays*/, bool /*occlusion*/) const {
+    return nullptr;
+  }
+
+  // As intersect()/occluded(), on the sub-range [begin, begin + rays.size())
+  // of the span given to prepare(). `prepared` may be null (nothing prepared).
+  virtual void intersect_prepared(const PreparedRays* /*prepared*/, size_t /*begin*/, std::span<const Ray> rays,
+                                  std::span<Hit> hits, TraversalStats* stats = nullptr) const {
+    intersect(rays, hits, stats);
+  }
+  virtual void occluded_prepared(const PreparedRays* /*prepared*/, size_t /*begin*/, std::span<const Ray> rays,
+                                 std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const {
+    this->occluded(rays, occluded, stats);
+  }
 
   // Convenience single-ray queries (not for hot loops).
   Hit intersect1(const Ray& r) const {

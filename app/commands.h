@@ -22,6 +22,7 @@ Runner add_render(CLI::App& app);
 Runner add_verify(CLI::App& app);
 Runner add_stress(CLI::App& app);
 Runner add_bench(CLI::App& app);
+Runner add_rays(CLI::App& app);
 Runner add_info(CLI::App& app);
 Runner add_scenes(CLI::App& app);
 Runner add_accels(CLI::App& app);

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add(add_verify, "verify");
   add(add_stress, "stress");
   add(add_bench, "bench");
+  add(add_rays, "rays");
   add(add_info, "info");
   add(add_scenes, "scenes");
   add(add_accels, "accels");

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "accel/embree/embree_accel.h"
 #include "accel/registry.h"
 #include "accel/util/timer.h"
 #include "bench/ray_sets.h"
@@ -29,10 +30,14 @@ nlohmann::json BenchRecord::to_json() const {
   j["mrays_per_s"] = mrays_per_s;
   j["mrays_min"] = mrays_min;
   j["mrays_max"] = mrays_max;
+  j["prepare_ms"] = prepare_ms;
   j["embree_mrays_per_s"] = embree_mrays_per_s;
   j["ratio_to_embree"] = ratio_to_embree;
+  j["best_embree"] = best_embree;
+  j["best_embree_mrays_per_s"] = best_embree_mrays_per_s;
+  j["ratio_to_best_embree"] = ratio_to_best_embree;
   j["embree_agreement"] = embree_agreement;
-  // null where a figure does not apply (docs/json_schema.md).
+  // null where a figure does not apply (docs/json-reports.md).
   auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   j["nodes_per_ray"] = number_or_null(nodes_per_ray);
   j["tris_per_ray"] = number_or_null(tris_per_ray);
@@ -89,7 +94,13 @@ Built build_accel(const std::string& spec, const Scene& scene, int repeats) {
 std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& accel_specs, size_t triangles,
                                                const BenchOptions& o) {
   std::vector<std::string> out;
-  for (const auto& spec : accel_specs) {
+  // Embree modes first, so the best of them is known for the other records.
+  std::vector<std::string> ordered;
+  for (const auto& spec : accel_specs)
+    if (is_embree_spec(spec)) ordered.push_back(spec);
+  for (const auto& spec : accel_specs)
+    if (!is_embree_spec(spec)) ordered.push_back(spec);
+  for (const auto& spec : ordered) {
     const bool brute = spec == "brute" || spec.rfind("brute:", 0) == 0;
     if (brute && o.brute_max_triangles > 0 && triangles > o.brute_max_triangles) continue;
     out.push_back(spec);
@@ -108,18 +119,38 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   say("building embree (reference)");
   Built embree = build_accel(o.embree_spec, scene, o.build_repeats);
 
-  RaySetOptions rso;
-  rso.width = o.width;
-  rso.height = o.height;
-  rso.random_count = o.random_rays;
-  rso.seed = o.seed;
-  const std::vector<RaySet> sets = make_ray_sets(scene, o.ray_sets, *embree.accel, rso);
+  std::vector<RaySet> sets = o.given_sets;
+  if (sets.empty()) {
+    RaySetOptions rso;
+    rso.width = o.width;
+    rso.height = o.height;
+    rso.random_count = o.random_rays;
+    rso.seed = o.seed;
+    sets = make_ray_sets(scene, o.ray_sets, *embree.accel, rso);
+  }
 
-  // Embree's timings per (set, threads) and its answers for agreement.
+  // The reference's prepared sets (made once), its answers for agreement.
+  std::vector<PreparedSet> embree_prepared(sets.size());
   std::vector<TraceOutput> embree_out(sets.size());
-  for (size_t s = 0; s < sets.size(); ++s) trace_set(*embree.accel, sets[s], 1, embree_out[s]);
+  for (size_t s = 0; s < sets.size(); ++s) {
+    embree_prepared[s] = prepare_set(*embree.accel, sets[s]);
+    trace_set(*embree.accel, sets[s], 1, embree_out[s], nullptr, embree_prepared[s].rays.get());
+  }
 
   std::vector<BenchRecord> records;
+  // The fastest Embree mode so far per (set, threads): its ratio to the reference and spec.
+  std::map<std::pair<size_t, int>, std::pair<double, std::string>> best;
+  std::map<std::pair<size_t, int>, double> best_mrays;
+  size_t embree_modes_left = 0;
+  for (const auto& spec : accel_specs) embree_modes_left += is_embree_spec(spec);
+  auto fill_best = [&](BenchRecord& r, size_t s) {
+    const auto it = best.find({s, r.threads});
+    if (it == best.end() || !(it->second.first > 0)) return;
+    r.best_embree = it->second.second;
+    r.best_embree_mrays_per_s = best_mrays[{s, r.threads}];
+    r.ratio_to_best_embree = r.ratio_to_embree / it->second.first;
+  };
+  std::vector<size_t> record_set;  // set index of each record
   for (const auto& spec : accel_specs) {
     if (stopped()) break;
     say(fmt::format("building {}", spec));
@@ -133,21 +164,27 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       continue;
     }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
+    const bool is_reference = &accel == embree.accel.get();
+    const bool embree_mode = is_embree_spec(b.spec);
     for (size_t s = 0; s < sets.size() && !stopped(); ++s) {
       const RaySet& set = sets[s];
+      say(fmt::format("preparing {} {} rays for {}", set.rays.size(), set.name, b.spec));
+      PreparedSet own;
+      if (!is_reference) own = prepare_set(accel, set);
+      const PreparedSet& prep = is_reference ? embree_prepared[s] : own;
       TraceOutput out;
-      trace_set(accel, set, 1, out);
+      trace_set(accel, set, 1, out, nullptr, prep.rays.get());
       const double agree = agreement(set, out, embree_out[s]);
       TraversalStats ts;
-      if (o.instrumented) trace_set(accel, set, 1, out, &ts);
+      if (o.instrumented) trace_set(accel, set, 1, out, &ts, prep.rays.get());
       for (int threads : o.threads) {
         if (stopped()) break;
         say(fmt::format("tracing {} {} rays with {} ({} thread{})", set.rays.size(), set.name, b.spec, threads,
                         threads == 1 ? "" : "s"));
         // Embree and the accelerator timed back to back, so drift on this
-        // shared machine affects both alike.
-        const TraceTiming et = time_trace(*embree.accel, set, threads, o.repeats);
-        const TraceTiming t = (&accel == embree.accel.get()) ? et : time_trace(accel, set, threads, o.repeats);
+        // shared machine affects both alike; both on their prepared rays.
+        const TraceTiming et = time_trace(*embree.accel, set, threads, o.repeats, embree_prepared[s].rays.get());
+        const TraceTiming t = is_reference ? et : time_trace(accel, set, threads, o.repeats, prep.rays.get());
         BenchRecord r;
         r.scene = scene.name;
         r.triangles = scene.num_triangles();
@@ -157,6 +194,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.rays = set.rays.size();
         r.build_ms = b.stats.build_ms;
         r.bytes = b.stats.bytes;
+        r.prepare_ms = prep.prepare_s * 1e3;
         r.mrays_per_s = t.mrays_per_s(r.rays);
         r.mrays_min = t.max_s > 0 ? r.rays / t.max_s * 1e-6 : 0;
         r.mrays_max = t.min_s > 0 ? r.rays / t.min_s * 1e-6 : 0;
@@ -176,19 +214,36 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
         r.trace_s = t.repeat_s;
         r.extra = b.stats.extra;
+        // The reference counts as measured (ratio 1) even when not in the list.
+        if (!best.count({s, threads})) {
+          best[{s, threads}] = {1.0, embree.spec};
+          best_mrays[{s, threads}] = r.embree_mrays_per_s;
+        }
+        if (embree_mode) {
+          auto& cur = best[{s, threads}];
+          if (r.ratio_to_embree > cur.first) {
+            cur = {r.ratio_to_embree, r.accel};
+            best_mrays[{s, threads}] = r.mrays_per_s;
+          }
+        }
+        // Embree modes get their best-mode figures once all of them ran (below).
+        if (!embree_mode || embree_modes_left == 1) fill_best(r, s);
         records.push_back(r);
+        record_set.push_back(s);
         if (on_record) on_record(r);
       }
     }
+    if (embree_mode && embree_modes_left > 0) --embree_modes_left;
   }
+  for (size_t i = 0; i < records.size(); ++i) fill_best(records[i], record_set[i]);
   return records;
 }
 
 std::string bench_csv(const std::vector<BenchRecord>& records) {
   static const char* const kColumns[] = {"scene",       "triangles",   "accel",          "ray_set",          "threads",
                                          "rays",        "build_ms",    "bytes",          "bytes_per_triangle",
-                                         "mrays_per_s", "mrays_min",   "mrays_max",      "embree_mrays_per_s",
-                                         "ratio_to_embree", "embree_agreement", "nodes_per_ray", "tris_per_ray",
+                                         "mrays_per_s", "mrays_min",   "mrays_max",      "prepare_ms", "embree_mrays_per_s",
+                                         "ratio_to_embree", "best_embree", "ratio_to_best_embree", "embree_agreement", "nodes_per_ray", "tris_per_ray",
                                          "sah_cost",    "nodes",       "leaves",         "max_depth"};
   auto quote = [](const std::string& v) {
     if (v.find_first_of(",\"\n") == std::string::npos) return v;
@@ -217,14 +272,16 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
 }
 
 std::string format_bench_table(const std::vector<BenchRecord>& records) {
-  std::string s = fmt::format("{:<28} {:<8} {:>3} {:>9} {:>10} {:>9} {:>9} {:>8} {:>8} {:>7} {:>7}\n", "accel", "rays",
-                              "thr", "build ms", "bytes", "Mrays/s", "embree", "ratio", "agree %", "nodes/r", "tris/r");
+  // "ratio": to single-ray `embree`; "/best": to the fastest Embree mode of the run (named in the last column).
+  std::string s = fmt::format("{:<34} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7}  {}\n", "accel",
+                              "rays", "thr", "build ms", "bytes", "prep ms", "Mrays/s", "embree", "ratio", "/best",
+                              "agree %", "nodes/r", "tris/r", "best embree");
   auto per_ray = [](double v) { return std::isfinite(v) ? fmt::format("{:.1f}", v) : std::string("n/a"); };
   for (const auto& r : records) {
-    s += fmt::format("{:<28} {:<8} {:>3} {:>9.2f} {:>10} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>7} {:>7}\n",
-                     r.accel.size() > 28 ? r.accel.substr(0, 28) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
-                     r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, 100.0 * r.embree_agreement,
-                     per_ray(r.nodes_per_ray), per_ray(r.tris_per_ray));
+    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7} {:>7}  {}\n",
+                     r.accel.size() > 34 ? r.accel.substr(0, 34) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
+                     r.prepare_ms, r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, r.ratio_to_best_embree,
+                     100.0 * r.embree_agreement, per_ray(r.nodes_per_ray), per_ray(r.tris_per_ray), r.best_embree);
   }
   return s;
 }

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accel/accelerator.h"
+#include "bench/ray_sets.h"
 #include "scenes/scene.h"
 
 namespace raylab {
@@ -31,6 +32,9 @@ struct BenchOptions {
   // Polled between cells: when it becomes true run_bench returns the records
   // finished so far (Ctrl-C in `raylab bench`).
   const std::atomic<bool>* stop = nullptr;
+  // When non-empty, these sets are traced instead of generating ray_sets
+  // (`raylab bench --ray-file`).
+  std::vector<RaySet> given_sets;
 };
 
 struct BenchRecord {
@@ -40,7 +44,14 @@ struct BenchRecord {
   double build_ms = 0;
   size_t bytes = 0;
   double mrays_per_s = 0, mrays_min = 0, mrays_max = 0;
-  double embree_mrays_per_s = 0, ratio_to_embree = 0;
+  double prepare_ms = 0;  // the structure's per-set preparation (not part of the timed traversal)
+  double embree_mrays_per_s = 0, ratio_to_embree = 0;  // the reference: single-ray `embree`
+  // The fastest Embree mode (any `embree...` spec) measured in the same run
+  // for this scene, ray set and thread count; ratio_to_best_embree =
+  // ratio_to_embree / (that mode's ratio_to_embree), so both come from
+  // back-to-back timings against the same reference.
+  std::string best_embree;
+  double best_embree_mrays_per_s = 0, ratio_to_best_embree = 0;
   double embree_agreement = 1.0;  // fraction of rays answered like Embree (ties count as agreement)
   double nodes_per_ray = 0, tris_per_ray = 0;  // NaN: not counted (Embree has no traversal counters)
   double sah_cost = 0;                          // NaN: not reported by the structure
@@ -56,8 +67,11 @@ struct BenchRecord {
 using BenchProgress = std::function<void(const std::string& message)>;
 using BenchRecordSink = std::function<void(const BenchRecord& record)>;
 
-// Records in the order accelerator x ray set x threads; on_record (when set)
-// is called as soon as each cell is finished, so callers can save them.
+// Records in the order accelerator x ray set x threads, Embree modes first;
+// on_record (when set) is called as soon as each cell is finished, so callers
+// can save them. The best-Embree fields are known only when every Embree
+// mode ran: they are filled in the returned records (and in those passed to
+// on_record after the last Embree mode).
 std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
                                    const BenchOptions& options, const BenchProgress& progress = {},
                                    const BenchRecordSink& on_record = {});

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# The benchmark scene set: the procedural library's hard cases (always) plus
-# every mesh of ../shared/scenes/MANIFEST.tsv and the SPD scenes when that
-# folder is present (skipped, with a note, when it is not).
+# The benchmark scene set: the procedural library's hard cases (always) plus,
+# when ../shared/scenes is present (skipped, with a note, when it is not),
+# its meshes seen the way researchers see them: the interior views of
+# scenes/shared/*.json (Sponza, the conference room and the dragon in Sponza
+# from inside, lights inside) instead of those files' outside framing, every
+# other mesh of MANIFEST.tsv with its own framing, and the SPD scenes.
 #
 #   scripts/bench-scenes.sh --list                  print the scene specs, one per line
 #   scripts/bench-scenes.sh [raylab bench options]  run `raylab bench` on each scene in turn,
@@ -14,7 +17,11 @@ cd "$root"
 scenes=(cornell sphereflake terrain grass stadium city tetra "soup:n=100000")
 shared="../shared/scenes"
 if [ -f "$shared/MANIFEST.tsv" ]; then
-  while IFS=$'\t' read -r _ file _; do scenes+=("$shared/$file"); done < <(tail -n +2 "$shared/MANIFEST.tsv")
+  interior=(sponza conference dragon_in_sponza)  # scenes/shared/NAME.json replaces the mesh's outside view
+  while IFS=$'\t' read -r name file _; do
+    if [[ " ${interior[*]} " == *" $name "* ]]; then scenes+=("scenes/shared/$name.json"); else scenes+=("$shared/$file"); fi
+  done < <(tail -n +2 "$shared/MANIFEST.tsv")
+  scenes+=("scenes/shared/sponza_aisle.json")  # a second Sponza viewpoint
   for f in "$shared"/spd/*.obj; do scenes+=("$f"); done
 else
   echo "bench-scenes: $shared not present: real meshes skipped" >&2

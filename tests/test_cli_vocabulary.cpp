@@ -364,7 +364,7 @@ TEST(CliNumbers, NotApplicableFiguresShowNaAndListingsAlign) {
   ASSERT_EQ(bench.exit_code, 0) << bench.output;
   EXPECT_THAT(bench.output, Not(HasSubstr("sah nan")));
   EXPECT_THAT(bench.output, HasSubstr("sah n/a, nodes n/a"));
-  EXPECT_THAT(bench.output, ::testing::ContainsRegex("embree +random +1 .* n/a +n/a\n"));
+  EXPECT_THAT(bench.output, ::testing::ContainsRegex("embree +random +1 .* n/a +n/a +embree\n"));
   // raylab accels: every parameter's help text starts in the same column.
   const auto accels = test::run_raylab("accels");
   std::istringstream lines(accels.output);
@@ -489,6 +489,31 @@ TEST(CliCamera, PlainMeshesGetAKeyLightWithShadowsUnderADimSky) {
     }
   EXPECT_GT(hi, 3 * lo) << "no shadow or shading contrast: lo " << lo << " hi " << hi;
   EXPECT_LT(hi, 1.0f) << "washed out";
+}
+
+}  // namespace
+}  // namespace raylab
+
+namespace raylab {
+namespace {
+
+TEST(CliVocabulary, RaysCommandSpeaksTheSameVocabulary) {
+  const auto dir = test::temp_dir("voc_rays_cmd");
+  // Positional scene, --ray-sets for the set, --rays for the count, -o for the file.
+  const auto r = test::run_raylab("rays soup:n=50 --ray-sets random --rays 321 -o " + q(dir / "r.rays"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("321 random rays"));
+  const auto b = test::run_raylab("bench soup:n=50 --ray-file " + q(dir / "r.rays") +
+                                  " --accel embree --repeats 1 -t 1 -q -o " + q(dir / "b.json"));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  EXPECT_EQ(read_json(dir / "b.json")["records"][0]["rays"], 321);
+  const auto two = test::run_raylab("rays cornell --ray-sets primary,random -o " + q(dir / "x.rays"));
+  EXPECT_EQ(two.exit_code, 2);
+  EXPECT_THAT(two.output, HasSubstr("one ray set per file"));
+  const auto name = test::run_raylab("rays cornell --ray-sets random --rays random -o " + q(dir / "x.rays"));
+  EXPECT_EQ(name.exit_code, 2);
+  EXPECT_THAT(name.output, HasSubstr("--ray-sets"));
+  EXPECT_FALSE(fs::exists(dir / "x.rays"));
 }
 
 }  // namespace

@@ -1,8 +1,20 @@
 // Embree 3 adapter: one device per accelerator (so its memory monitor counts
 // exactly this structure's bytes), one triangle geometry whose vertex and
-// index buffers are our own memory (shared buffers), rtcIntersect1 /
-// rtcOccluded1 per ray inside the batch loop.
+// index buffers are our own memory (shared buffers).
+//
+// Timed = traversal only. prepare() converts a ray set into Embree's own
+// layout once, outside the timed region: an RTCRayHit / RTCRay array (api
+// single and stream) or SOA packets RTCRayHit4/8/16 / RTCRay4/8/16 with
+// their valid masks (the partial last packet masked with valid[k] = 0).
+// Rays Embree cannot take as they are (negative tmin, huge or denormal
+// directions, far origins, invalid rays) are mapped during preparation and
+// listed in a side list, so the traced loop is a plain rtcIntersect1 /
+// rtcOccluded1 (or packet / stream) loop plus writing our Hit; only listed
+// rays get their distances mapped back afterwards.
 #include "accel/embree/embree_accel.h"
+
+#include "accel/embree/embree_packets.h"
+#include "accel/embree/embree_ray_map.h"
 
 #include <embree3/rtcore.h>
 
@@ -39,10 +51,36 @@ const char* error_name(RTCError e) {
   return "unrecognised error";
 }
 
+enum class Api { single, packet4, packet8, packet16, stream };
+
+using namespace embree_adapter;
+
+struct EmbreePrepared final : PreparedRays {
+  const void* owner = nullptr;  // the accelerator that prepared it
+  bool occlusion = false;
+  size_t count = 0;
+  std::vector<RTCRayHit> rayhits;  // api single / stream, closest hit
+  std::vector<RTCRay> rays;        // api single / stream, occlusion
+  Packets<4> p4;
+  Packets<8> p8;
+  Packets<16> p16;
+  std::vector<RayFix> fixes;  // sorted by index
+
+  // The listed rays within [begin, end).
+  std::span<const RayFix> fixes_in(size_t begin, size_t end) const {
+    const auto by_index = [](const RayFix& f, size_t i) { return f.index < i; };
+    const auto lo = std::lower_bound(fixes.begin(), fixes.end(), begin, by_index);
+    const auto hi = std::lower_bound(lo, fixes.end(), end, by_index);
+    return {fixes.data() + (lo - fixes.begin()), static_cast<size_t>(hi - lo)};
+  }
+};
+
+constexpr size_t kStreamBlock = 256;  // rays per rtcIntersect1M call
+
 class EmbreeAccel final : public Accelerator {
  public:
-  EmbreeAccel(RTCBuildQuality quality, bool robust, bool compact)
-      : quality_(quality), robust_(robust), compact_(compact) {
+  EmbreeAccel(RTCBuildQuality quality, bool robust, bool compact, Api api, bool coherent)
+      : quality_(quality), robust_(robust), compact_(compact), api_(api), coherent_(coherent) {
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw EmbreeError(fmt::format("embree: cannot create device: {}", error_name(rtcGetDeviceError(nullptr))));
     rtcSetDeviceErrorFunction(device_, &EmbreeAccel::on_error, this);
@@ -53,6 +91,12 @@ class EmbreeAccel final : public Accelerator {
     if (scene_) rtcReleaseScene(scene_);
     if (device_) rtcReleaseDevice(device_);
   }
+
+  RTCScene scene() const {
+    if (!scene_) throw EmbreeError("embree: tracing before build");
+    return scene_;
+  }
+  bool coherent() const { return coherent_; }
 
   BuildStats build(const TriangleMesh& mesh) override {
     mesh.validate();
@@ -91,110 +135,178 @@ class EmbreeAccel final : public Accelerator {
     return stats;
   }
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if (!scene_) throw EmbreeError("embree: intersect before build");
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    for (size_t i = 0; i < rays.size(); ++i) {
-      const Ray& r = rays[i];
-      Hit& h = hits[i];
-      h = Hit{};
-      if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
-      RTCRayHit rh;
-      const RayMap map = fill_ray(r, rh.ray);
-      if (!map.ok) continue;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene_, &ctx, &rh);
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && !std::isnan(rh.ray.tfar)) {
-        // Clamped to the ray's range: the mapping back may round just outside it.
-        h.t = std::clamp(rh.ray.tfar * map.scale + map.shift, r.tmin, r.tmax);
-        h.u = rh.hit.u;
-        h.v = rh.hit.v;
-        h.prim = rh.hit.primID;
+  std::unique_ptr<PreparedRays> prepare(std::span<const Ray> rays, bool occlusion) const override {
+    auto p = std::make_unique<EmbreePrepared>();
+    p->owner = this;
+    p->occlusion = occlusion;
+    p->count = rays.size();
+    const size_t n = rays.size();
+    // Every ray in AOS form first (the single / stream layout); packets are
+    // filled from it.
+    std::vector<RTCRayHit> aos(n);
+    for (size_t i = 0; i < n; ++i) {
+      RayFix fix;
+      reset_hit(aos[i].hit);
+      if (map_ray(rays[i], aos[i].ray, fix)) {
+        fix.index = i;
+        p->fixes.push_back(fix);
       }
     }
+    switch (api_) {
+      case Api::single:
+      case Api::stream:
+        if (occlusion) {
+          p->rays.resize(n);
+          for (size_t i = 0; i < n; ++i) p->rays[i] = aos[i].ray;
+        } else {
+          p->rayhits = std::move(aos);
+        }
+        break;
+      case Api::packet4: fill_packets(aos, p->fixes, occlusion, p->p4); break;
+      case Api::packet8: fill_packets(aos, p->fixes, occlusion, p->p8); break;
+      case Api::packet16: fill_packets(aos, p->fixes, occlusion, p->p16); break;
+    }
+    return p;
+  }
+
+  // The prepared set when this accelerator made it for this kind of query.
+  const EmbreePrepared* mine(const PreparedRays* prepared, bool occlusion, size_t begin, size_t n) const {
+    const auto* p = dynamic_cast<const EmbreePrepared*>(prepared);
+    return p && p->owner == this && p->occlusion == occlusion && begin + n <= p->count ? p : nullptr;
+  }
+
+  void intersect_prepared(const PreparedRays* prepared, size_t begin, std::span<const Ray> rays, std::span<Hit> hits,
+                          TraversalStats* stats) const override {
+    const EmbreePrepared* p = mine(prepared, false, begin, rays.size());
+    if (!p) {
+      intersect(rays, hits, stats);
+      return;
+    }
+    const size_t end = begin + rays.size();
+    RTCIntersectContext ctx = context();
+    RTCScene s = scene();
+    switch (api_) {
+      case Api::single:
+        // The traced loop: Embree's call and writing our hit, nothing else.
+        for (size_t i = begin; i < end; ++i) {
+          RTCRayHit rh = p->rayhits[i];
+          rtcIntersect1(s, &ctx, &rh);
+          write_hit(rh, hits[i - begin]);
+        }
+        break;
+      case Api::stream: {
+        RTCRayHit block[kStreamBlock];
+        for (size_t b = begin; b < end; b += kStreamBlock) {
+          const size_t m = std::min(kStreamBlock, end - b);
+          std::memcpy(static_cast<void*>(block), p->rayhits.data() + b, m * sizeof(RTCRayHit));
+          rtcIntersect1M(s, &ctx, block, static_cast<unsigned>(m), sizeof(RTCRayHit));
+          for (size_t k = 0; k < m; ++k) write_hit(block[k], hits[b + k - begin]);
+        }
+        break;
+      }
+      case Api::packet4: intersect_packets(p->p4, s, ctx, begin, end, hits); break;
+      case Api::packet8: intersect_packets(p->p8, s, ctx, begin, end, hits); break;
+      case Api::packet16: intersect_packets(p->p16, s, ctx, begin, end, hits); break;
+    }
+    for (const RayFix& f : p->fixes_in(begin, end)) fix_hit(f, hits[f.index - begin]);
     if (stats) stats->rays += rays.size();  // Embree exposes no per-ray counters
   }
 
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    if (!scene_) throw EmbreeError("embree: occluded before build");
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+  void occluded_prepared(const PreparedRays* prepared, size_t begin, std::span<const Ray> rays, std::span<uint8_t> occ,
+                         TraversalStats* stats) const override {
+    const EmbreePrepared* p = mine(prepared, true, begin, rays.size());
+    if (!p) {
+      occluded(rays, occ, stats);
+      return;
+    }
+    const size_t end = begin + rays.size();
+    RTCIntersectContext ctx = context();
+    RTCScene s = scene();
+    switch (api_) {
+      case Api::single:
+        for (size_t i = begin; i < end; ++i) {
+          RTCRay ray = p->rays[i];
+          rtcOccluded1(s, &ctx, &ray);
+          occ[i - begin] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
+        }
+        break;
+      case Api::stream: {
+        RTCRay block[kStreamBlock];
+        for (size_t b = begin; b < end; b += kStreamBlock) {
+          const size_t m = std::min(kStreamBlock, end - b);
+          std::memcpy(static_cast<void*>(block), p->rays.data() + b, m * sizeof(RTCRay));
+          rtcOccluded1M(s, &ctx, block, static_cast<unsigned>(m), sizeof(RTCRay));
+          for (size_t k = 0; k < m; ++k) occ[b + k - begin] = block[k].tfar < 0.0f ? 1 : 0;
+        }
+        break;
+      }
+      case Api::packet4: occluded_packets(p->p4, s, ctx, begin, end, occ); break;
+      case Api::packet8: occluded_packets(p->p8, s, ctx, begin, end, occ); break;
+      case Api::packet16: occluded_packets(p->p16, s, ctx, begin, end, occ); break;
+    }
+    for (const RayFix& f : p->fixes_in(begin, end))
+      if (!f.traced) occ[f.index - begin] = 0;
+    if (stats) stats->rays += rays.size();
+  }
+
+  // Unprepared batches (the tracer, verify): single-ray mode converts ray by
+  // ray on the stack (no allocation for one-ray calls); the other modes
+  // prepare the batch first.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    RTCScene s = scene();
+    if (api_ != Api::single) {
+      const auto p = prepare(rays, false);
+      intersect_prepared(p.get(), 0, rays, hits, stats);
+      return;
+    }
+    RTCIntersectContext ctx = context();
     for (size_t i = 0; i < rays.size(); ++i) {
-      const Ray& r = rays[i];
-      occ[i] = 0;
-      if (!ray_is_valid(r) || !(r.tmin <= r.tmax)) continue;
+      RTCRayHit rh;
+      RayFix fix;
+      reset_hit(rh.hit);
+      const bool mapped = map_ray(rays[i], rh.ray, fix);
+      if (mapped && !fix.traced) {
+        hits[i] = Hit{};
+        continue;
+      }
+      rtcIntersect1(s, &ctx, &rh);
+      write_hit(rh, hits[i]);
+      if (mapped) fix_hit(fix, hits[i]);
+    }
+    if (stats) stats->rays += rays.size();
+  }
+
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    RTCScene s = scene();
+    if (api_ != Api::single) {
+      const auto p = prepare(rays, true);
+      occluded_prepared(p.get(), 0, rays, occ, stats);
+      return;
+    }
+    RTCIntersectContext ctx = context();
+    for (size_t i = 0; i < rays.size(); ++i) {
       RTCRay ray;
-      if (!fill_ray(r, ray).ok) continue;
-      rtcOccluded1(scene_, &ctx, &ray);
+      RayFix fix;
+      if (map_ray(rays[i], ray, fix) && !fix.traced) {
+        occ[i] = 0;
+        continue;
+      }
+      rtcOccluded1(s, &ctx, &ray);
       occ[i] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
     }
     if (stats) stats->rays += rays.size();
   }
 
- private:
-  // Embree's valid ray (asserted in its debug builds, undefined otherwise):
-  // 0 <= tnear, and every origin and direction component within
-  // FLT_LARGE = 1.844e18 in magnitude. Our rays are wider, so fill_ray maps
-  // them: a segment that starts behind the origin (tmin < 0) is traced from
-  // the point at tmin (rounded to float, so distances can differ in the last
-  // bits from a structure that keeps the original origin), and a direction
-  // beyond FLT_LARGE is scaled by a power of two (exact), distances by the
-  // inverse, denormal components become zeros. Hit distances map back as
-  // t = t_embree * scale + shift (a NaN distance from Embree is a miss). Rays
-  // whose origin (after the shift) is beyond FLT_LARGE cannot be given to
-  // Embree at all: the adapter reports them as misses (a documented limit of
-  // the reference; no scene of ours reaches 1e18). tmin = -inf cannot be
-  // shifted: Embree then sees only the part t >= 0.
-  struct RayMap {
-    float shift = 0.0f, scale = 1.0f;
-    bool ok = true;
-  };
-  static constexpr float kEmbreeLarge = 1.8e18f;  // just below Embree's FLT_LARGE
-
-  static RayMap fill_ray(const Ray& r, RTCRay& ray) {
-    RayMap m;
-    float org[3] = {r.org.x(), r.org.y(), r.org.z()};
-    float dir[3] = {r.dir.x(), r.dir.y(), r.dir.z()};
-    float tmin = r.tmin, tmax = r.tmax;
-    if (tmin < 0.0f && std::isfinite(tmin)) {
-      m.shift = tmin;
-      for (int a = 0; a < 3; ++a)
-        org[a] = static_cast<float>(static_cast<double>(r.org[a]) + static_cast<double>(tmin) * r.dir[a]);
-      tmax -= tmin;
-      tmin = 0.0f;
-    }
-    // Denormal components become signed zeros: Embree's kernels run with
-    // denormals flushed and return NaN distances for them (found by fuzz_rays).
-    for (float& d : dir)
-      if (std::fabs(d) < FLT_MIN) d = std::copysign(0.0f, d);
-    const float dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
-    if (dmax > kEmbreeLarge) {
-      int e = 0;
-      std::frexp(dmax / kEmbreeLarge, &e);  // 2^e > dmax / large
-      for (float& d : dir) d = std::ldexp(d, -e);
-      tmin = std::ldexp(tmin, e);
-      tmax = std::ldexp(tmax, e);
-      m.scale = std::ldexp(1.0f, -e);
-    }
-    for (float o : org) m.ok &= std::fabs(o) <= kEmbreeLarge;
-    ray.org_x = org[0];
-    ray.org_y = org[1];
-    ray.org_z = org[2];
-    ray.tnear = std::max(0.0f, tmin);
-    ray.dir_x = dir[0];
-    ray.dir_y = dir[1];
-    ray.dir_z = dir[2];
-    ray.time = 0.0f;
-    ray.tfar = tmax;  // tmax = +inf stays +inf
-    ray.mask = 0xFFFFFFFFu;
-    ray.id = 0;
-    ray.flags = 0;
-    return m;
+  RTCIntersectContext context() const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    if (coherent_) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    return ctx;
   }
 
+  Api api() const { return api_; }
+
+ private:
   static void on_error(void* user, RTCError code, const char* msg) {
     auto* self = static_cast<EmbreeAccel*>(user);
     std::lock_guard<std::mutex> lock(self->error_mutex_);
@@ -221,6 +333,8 @@ class EmbreeAccel final : public Accelerator {
   RTCBuildQuality quality_;
   bool robust_;
   bool compact_;
+  Api api_;
+  bool coherent_;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::vector<float> vertices_;
@@ -234,18 +348,82 @@ class EmbreeAccel final : public Accelerator {
 AcceleratorInfo embree_accelerator_info() {
   return AcceleratorInfo{
       "embree",
-      "Embree 3 reference (rtcIntersect1/rtcOccluded1 per ray)",
+      "Embree 3 reference (rtcIntersect1/rtcOccluded1 per ray; packet and stream APIs with api=)",
       {{"quality", "medium", "build quality: low, medium (Embree's default) or high"},
        {"robust", "0", "1 = RTC_SCENE_FLAG_ROBUST (watertight-style robust traversal)"},
-       {"compact", "0", "1 = RTC_SCENE_FLAG_COMPACT"}},
+       {"compact", "0", "1 = RTC_SCENE_FLAG_COMPACT"},
+       {"api", "single",
+        "single (rtcIntersect1), packet4/packet8/packet16 (rtcIntersect4/8/16, rays packed in the order given), "
+        "stream (rtcIntersect1M)"},
+       {"coherent", "0", "1 = RTC_INTERSECT_CONTEXT_FLAG_COHERENT"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         const std::string& q = p.choice("quality", {"low", "medium", "high"});
         const RTCBuildQuality quality = q == "low"    ? RTC_BUILD_QUALITY_LOW
                                         : q == "high" ? RTC_BUILD_QUALITY_HIGH
                                                       : RTC_BUILD_QUALITY_MEDIUM;
-        return std::make_unique<EmbreeAccel>(quality, p.boolean("robust"), p.boolean("compact"));
+        const std::string& a = p.choice("api", {"single", "packet4", "packet8", "packet16", "stream"});
+        const Api api = a == "packet4"    ? Api::packet4
+                        : a == "packet8"  ? Api::packet8
+                        : a == "packet16" ? Api::packet16
+                        : a == "stream"   ? Api::stream
+                                          : Api::single;
+        return std::make_unique<EmbreeAccel>(quality, p.boolean("robust"), p.boolean("compact"), api,
+                                             p.boolean("coherent"));
       }};
 }
+
+namespace {
+
+const EmbreePrepared& direct_loop_input(const Accelerator& embree, const PreparedRays& prepared, bool occlusion,
+                                        size_t n) {
+  const auto* accel = dynamic_cast<const EmbreeAccel*>(&embree);
+  const auto* p = dynamic_cast<const EmbreePrepared*>(&prepared);
+  if (!accel || accel->api() != Api::single || !p || p->owner != accel || p->occlusion != occlusion || p->count != n)
+    throw std::invalid_argument("embree direct loop: needs rays prepared by an 'embree' accelerator with api=single");
+  return *p;
+}
+
+}  // namespace
+
+void embree_direct_intersect(const Accelerator& embree, const PreparedRays& prepared, std::span<Hit> hits) {
+  const EmbreePrepared& p = direct_loop_input(embree, prepared, false, hits.size());
+  const auto& accel = static_cast<const EmbreeAccel&>(embree);
+  RTCScene scene = accel.scene();
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (accel.coherent()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  const size_t n = hits.size();
+  for (size_t i = 0; i < n; ++i) {
+    RTCRayHit rh = p.rayhits[i];
+    rtcIntersect1(scene, &ctx, &rh);
+    Hit& h = hits[i];
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      h.t = rh.ray.tfar;
+      h.u = rh.hit.u;
+      h.v = rh.hit.v;
+      h.prim = rh.hit.primID;
+    } else {
+      h = Hit{};
+    }
+  }
+}
+
+void embree_direct_occluded(const Accelerator& embree, const PreparedRays& prepared, std::span<uint8_t> occluded) {
+  const EmbreePrepared& p = direct_loop_input(embree, prepared, true, occluded.size());
+  const auto& accel = static_cast<const EmbreeAccel&>(embree);
+  RTCScene scene = accel.scene();
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (accel.coherent()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  const size_t n = occluded.size();
+  for (size_t i = 0; i < n; ++i) {
+    RTCRay ray = p.rays[i];
+    rtcOccluded1(scene, &ctx, &ray);
+    occluded[i] = ray.tfar < 0.0f ? 1 : 0;
+  }
+}
+
+bool is_embree_spec(const std::string& spec) { return spec == "embree" || spec.rfind("embree:", 0) == 0; }
 
 std::string embree_version_string() {
   RTCDevice dev = rtcNewDevice(nullptr);

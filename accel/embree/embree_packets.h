@@ -1,0 +1,147 @@
+#pragma once
+// Embree's SOA packets (RTCRayHit4/8/16, RTCRay4/8/16) for the adapter's
+// packet modes: filled once in prepare(), in the order the rays are given,
+// and traced on any sub-range [begin, end) of the prepared set.
+#include <embree3/rtcore.h>
+
+#include <span>
+#include <vector>
+
+#include "accel/embree/embree_ray_map.h"
+
+namespace raylab::embree_adapter {
+
+// SOA packet types and calls per width.
+template <int N>
+struct PacketApi;
+template <>
+struct PacketApi<4> {
+  using RayHitN = RTCRayHit4;
+  using RayN = RTCRay4;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect4(v, s, c, r); }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded4(v, s, c, r); }
+};
+template <>
+struct PacketApi<8> {
+  using RayHitN = RTCRayHit8;
+  using RayN = RTCRay8;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect8(v, s, c, r); }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded8(v, s, c, r); }
+};
+template <>
+struct PacketApi<16> {
+  using RayHitN = RTCRayHit16;
+  using RayN = RTCRay16;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect16(v, s, c, r); }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded16(v, s, c, r); }
+};
+
+// Embree requires the valid mask aligned like the packet.
+template <int N>
+struct alignas(4 * N) ValidMask {
+  int v[N] = {};
+};
+
+template <class RayN>
+inline void put_ray(RayN& p, int k, const RTCRay& r) {
+  p.org_x[k] = r.org_x;
+  p.org_y[k] = r.org_y;
+  p.org_z[k] = r.org_z;
+  p.tnear[k] = r.tnear;
+  p.dir_x[k] = r.dir_x;
+  p.dir_y[k] = r.dir_y;
+  p.dir_z[k] = r.dir_z;
+  p.time[k] = r.time;
+  p.tfar[k] = r.tfar;
+  p.mask[k] = r.mask;
+  p.id[k] = r.id;
+  p.flags[k] = r.flags;
+}
+
+template <int N>
+struct Packets {
+  std::vector<typename PacketApi<N>::RayHitN> hit;  // closest-hit sets
+  std::vector<typename PacketApi<N>::RayN> ray;     // occlusion sets
+  std::vector<ValidMask<N>> valid;
+};
+
+
+// Rays grouped into packets in the order given; the partial last packet and
+// the rays the side list marks as untraced are masked out (valid = 0).
+template <int N>
+inline void fill_packets(const std::vector<RTCRayHit>& aos, const std::vector<RayFix>& fixes, bool occlusion,
+                  Packets<N>& out) {
+  const size_t n = aos.size(), np = (n + N - 1) / N;
+  out.valid.assign(np, ValidMask<N>{});
+  if (occlusion) out.ray.resize(np);
+  else out.hit.resize(np);
+  RTCRay dummy;
+  set_dummy_ray(dummy);
+  for (size_t p = 0; p < np; ++p) {
+    for (int k = 0; k < N; ++k) {
+      const size_t i = p * N + k;
+      const RTCRay& r = i < n ? aos[i].ray : dummy;
+      out.valid[p].v[k] = i < n ? -1 : 0;
+      if (occlusion) {
+        put_ray(out.ray[p], k, r);
+      } else {
+        put_ray(out.hit[p].ray, k, r);
+        out.hit[p].hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        out.hit[p].hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
+        out.hit[p].hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+      }
+    }
+  }
+  for (const RayFix& f : fixes)
+    if (!f.traced) out.valid[f.index / N].v[f.index % N] = 0;
+}
+
+// Valid mask of packet p restricted to [begin, end).
+template <int N>
+const int* packet_mask(const Packets<N>& pk, size_t p, size_t begin, size_t end, ValidMask<N>& local) {
+  const size_t base = p * N;
+  if (base >= begin && base + N <= end) return pk.valid[p].v;
+  for (int k = 0; k < N; ++k) local.v[k] = (base + k >= begin && base + k < end) ? pk.valid[p].v[k] : 0;
+  return local.v;
+}
+
+template <int N>
+inline void intersect_packets(const Packets<N>& pk, RTCScene s, RTCIntersectContext& ctx, size_t begin, size_t end,
+                       std::span<Hit> hits) {
+  ValidMask<N> local;
+  for (size_t p = begin / N; p * N < end; ++p) {
+    typename PacketApi<N>::RayHitN rh = pk.hit[p];
+    PacketApi<N>::intersect(packet_mask(pk, p, begin, end, local), s, &ctx, &rh);
+    const size_t base = p * N;
+    for (int k = 0; k < N; ++k) {
+      const size_t i = base + k;
+      if (i < begin || i >= end) continue;
+      Hit& h = hits[i - begin];
+      if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
+        h.t = rh.ray.tfar[k];
+        h.u = rh.hit.u[k];
+        h.v = rh.hit.v[k];
+        h.prim = rh.hit.primID[k];
+      } else {
+        h = Hit{};
+      }
+    }
+  }
+}
+
+template <int N>
+inline void occluded_packets(const Packets<N>& pk, RTCScene s, RTCIntersectContext& ctx, size_t begin, size_t end,
+                      std::span<uint8_t> occ) {
+  ValidMask<N> local;
+  for (size_t p = begin / N; p * N < end; ++p) {
+    typename PacketApi<N>::RayN r = pk.ray[p];
+    PacketApi<N>::occluded(packet_mask(pk, p, begin, end, local), s, &ctx, &r);
+    const size_t base = p * N;
+    for (int k = 0; k < N; ++k) {
+      const size_t i = base + k;
+      if (i >= begin && i < end) occ[i - begin] = r.tfar[k] < 0.0f ? 1 : 0;  // tfar = -inf on a hit
+    }
+  }
+}
+
+}  // namespace raylab::embree_adapter
