@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench bench-full microbench clean
+.PHONY: all deps configure build test demo bench bench-full bench-slurm-local microbench clean
 
 all: build
 
@@ -23,15 +23,26 @@ demo: build
 	./$(BUILD)/raylab render --scene cornell --accel bvh --spp 64 --size 512x512 --out out/cornell.png
 	./$(BUILD)/raylab bench --scene cornell --accel all --ray-sets primary,random --quiet
 
-# Timing sweeps and charts (scripts/run_bench.sh): out/bench/*.json, *.csv,
-# out/bench/charts/*.png|svg; the quick preset also refreshes docs/charts/.
+# The benchmark study (workflow/Snakefile, configured by workflow/config.yaml): one job per
+# cell, merged into out/bench/*.json, *.csv, charts and summary.md; the quick preset also
+# refreshes docs/charts/. A rerun with nothing changed does nothing. SNAKEFLAGS adds options
+# (e.g. SNAKEFLAGS=--forceall, or -n for a dry run).
+SNAKEMAKE = snakemake -s workflow/Snakefile --cores $(JOBS) --config raylab=$(BUILD)/raylab
+SNAKEFLAGS ?=
+
 bench: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab
-	BUILD=$(BUILD) bash scripts/run_bench.sh quick
+	$(SNAKEMAKE) preset=quick $(SNAKEFLAGS)
 
 bench-full: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab
-	BUILD=$(BUILD) OUT=out/bench-full bash scripts/run_bench.sh full
+	$(SNAKEMAKE) preset=full $(SNAKEFLAGS)
+
+# The quick workflow through a one-node Slurm cluster started on this machine
+# (scripts/slurm-local.sh), compared cell by cell with a local run.
+bench-slurm-local: configure
+	cmake --build $(BUILD) -j $(JOBS) --target raylab
+	BUILD=$(BUILD) bash scripts/slurm-local.sh test
 
 microbench: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab_microbench

@@ -89,6 +89,7 @@ Runner add_bench(CLI::App& app) {
     std::string accel = "embree,bvh", ray_sets = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
     std::vector<std::string> scenes, positional_scenes, scales, sweeps;
     size_t random_rays = 262144, brute_max_tris = 0;
+    double memory_headroom = 0.95;
     int repeats = 5, build_repeats = 1;
     uint64_t seed = 1;
     bool quiet = false, selfcheck = false;
@@ -115,6 +116,10 @@ Runner add_bench(CLI::App& app) {
   cmd->add_option("--build-repeats", o->build_repeats, "builds per accelerator (median reported)")->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_option("--brute-max-tris", o->brute_max_tris, "skip brute on scenes with more triangles (0 = never skip)")->capture_default_str();
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
+  cmd->add_option("--memory-headroom", o->memory_headroom,
+                  "skip a structure whose estimated peak memory exceeds this share of the available memory (0 = never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--sweep", o->sweeps, "PARAM=v1,v2,...: one run per value for every accelerator with PARAM (repeatable)");
   cmd->add_option("-o,--json", o->json, "write records to this JSON file (rewritten after every cell)");
   cmd->add_option("--csv", o->csv, "write records to this CSV file (default: next to --json, .csv)");
@@ -200,6 +205,7 @@ Runner add_bench(CLI::App& app) {
     bo.build_repeats = o->build_repeats;
     bo.brute_max_triangles = o->brute_max_tris;
     bo.seed = o->seed;
+    bo.memory_headroom = o->memory_headroom;
     bo.given_sets = file_sets;
     if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
     const std::string csv = !o->csv.empty() ? o->csv : (o->json.empty() ? std::string() : csv_path_for(o->json));
@@ -212,12 +218,15 @@ Runner add_bench(CLI::App& app) {
                          {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
                          {"ray_file", o->ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->ray_file)}};
     std::vector<BenchRecord> all;
+    std::vector<BenchSkip> skipped;
     auto save = [&](bool complete) {
       if (!o->json.empty()) {
         nlohmann::json recs = nlohmann::json::array();
         for (const auto& r : all) recs.push_back(r.to_json());
         nlohmann::json h = header;
         h["complete"] = complete;
+        h["skipped"] = nlohmann::json::array();
+        for (const auto& s : skipped) h["skipped"].push_back(s.to_json());
         write_json_report(o->json, h, recs);
       }
       if (!csv.empty()) write_file_atomically(csv, bench_csv(all));
@@ -267,6 +276,10 @@ Runner add_bench(CLI::App& app) {
           std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
                        done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
                        r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
+      }, [&](const BenchSkip& skip) {
+        skipped.push_back(skip);
+        save(false);
+        std::printf("bench %s: %s skipped: %s\n", skip.scene.c_str(), skip.accel.c_str(), skip.reason.c_str());
       });
       // The returned records carry the best-Embree figures of the whole run.
       if (all.size() >= records.size()) {

@@ -11,6 +11,8 @@
 #include "accel/embree/embree_accel.h"
 #include "accel/registry.h"
 #include "accel/util/timer.h"
+#include "bench/memory_estimate.h"
+#include "bench/process_memory.h"
 #include "bench/ray_sets.h"
 #include "bench/trace.h"
 
@@ -47,7 +49,14 @@ nlohmann::json BenchRecord::to_json() const {
   j["max_depth"] = has_tree ? nlohmann::json(max_depth) : nlohmann::json(nullptr);
   j["trace_s"] = trace_s;
   j["extra"] = extra;
+  j["rss_before_build_bytes"] = rss_before_build_bytes;
+  j["rss_peak_bytes"] = rss_peak_bytes;
   return j;
+}
+
+nlohmann::json BenchSkip::to_json() const {
+  return {{"scene", scene},           {"triangles", triangles},             {"accel", accel},
+          {"reason", reason},         {"estimated_bytes", estimated_bytes}, {"available_bytes", available_bytes}};
 }
 
 namespace {
@@ -110,14 +119,42 @@ std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& a
 
 std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& all_specs,
                                    const BenchOptions& o, const BenchProgress& progress,
-                                   const BenchRecordSink& on_record) {
+                                   const BenchRecordSink& on_record, const BenchSkipSink& on_skip) {
   auto say = [&](const std::string& m) {
     if (progress) progress(m);
   };
   auto stopped = [&] { return o.stop && o.stop->load(); };
-  const std::vector<std::string> accel_specs = bench_specs_for_scene(all_specs, scene.num_triangles(), o);
+  const size_t triangles = scene.num_triangles();
+  const std::vector<std::string> accel_specs = bench_specs_for_scene(all_specs, triangles, o);
+  // A structure fits when its estimated peak is below the headroom share of
+  // what the OS can still give this process (a Slurm job's cgroup included).
+  auto fits = [&](const std::string& spec, size_t extra_room, size_t& estimate, size_t& available) {
+    estimate = estimate_build_peak_bytes(spec, triangles);
+    available = available_memory_bytes();
+    return o.memory_headroom <= 0 ||
+           static_cast<double>(estimate) <= o.memory_headroom * static_cast<double>(available + extra_room);
+  };
+  auto skip = [&](const std::string& spec, const std::string& reason, size_t estimate, size_t available) {
+    std::fprintf(stderr, "bench: %s on %s: skipped: %s\n", spec.c_str(), scene.name.c_str(), reason.c_str());
+    if (on_skip) on_skip(BenchSkip{scene.name, spec, reason, triangles, estimate, available});
+  };
+  auto needs = [](size_t estimate, size_t available) {
+    return fmt::format("needs ~{} by its estimate, {} available", format_gib(static_cast<double>(estimate)),
+                       format_gib(static_cast<double>(available)));
+  };
+
+  size_t estimate = 0, available = 0;
+  if (!fits(o.embree_spec, 0, estimate, available)) {
+    // Without the reference nothing can be timed: every structure is skipped.
+    const std::string reason = "the Embree reference " + needs(estimate, available);
+    for (const auto& spec : accel_specs) skip(spec, reason, estimate, available);
+    return {};
+  }
   say("building embree (reference)");
+  reset_peak_resident();
+  const size_t rss_before_embree = resident_bytes();
   Built embree = build_accel(o.embree_spec, scene, o.build_repeats);
+  const size_t embree_resident = resident_bytes() > rss_before_embree ? resident_bytes() - rss_before_embree : 0;
 
   std::vector<RaySet> sets = o.given_sets;
   if (sets.empty()) {
@@ -136,6 +173,14 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
     embree_prepared[s] = prepare_set(*embree.accel, sets[s]);
     trace_set(*embree.accel, sets[s], 1, embree_out[s], nullptr, embree_prepared[s].rays.get());
   }
+  // Filled only when Embree is released to make room (then timed once, first).
+  std::map<std::pair<size_t, int>, TraceTiming> embree_timed_first;
+  auto embree_timing = [&](size_t s, int threads) {
+    const auto it = embree_timed_first.find({s, threads});
+    return it != embree_timed_first.end()
+               ? it->second
+               : time_trace(*embree.accel, sets[s], threads, o.repeats, embree_prepared[s].rays.get());
+  };
 
   std::vector<BenchRecord> records;
   // The fastest Embree mode so far per (set, threads): its ratio to the reference and spec.
@@ -153,14 +198,38 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   std::vector<size_t> record_set;  // set index of each record
   for (const auto& spec : accel_specs) {
     if (stopped()) break;
+    const bool is_embree = spec == embree.spec;
+    if (is_embree && !embree.accel) {
+      skip(spec, "the Embree reference was released to make room for a larger structure", 0, 0);
+      continue;
+    }
+    size_t rss_before_build = rss_before_embree;
+    if (!is_embree) {
+      if (!fits(spec, 0, estimate, available)) {
+        if (embree.accel && fits(spec, embree_resident, estimate, available)) {
+          // Fits once Embree's memory is returned: time Embree on every
+          // (set, threads) now, keep its answers, release it.
+          for (size_t s = 0; s < sets.size(); ++s)
+            for (int threads : o.threads) embree_timed_first[{s, threads}] = embree_timing(s, threads);
+          embree.accel.reset();
+          std::fprintf(stderr, "bench: %s on %s: %s; Embree timed first and released\n", spec.c_str(),
+                       scene.name.c_str(), needs(estimate, available).c_str());
+        } else {
+          skip(spec, needs(estimate, available), estimate, available);
+          continue;
+        }
+      }
+      reset_peak_resident();
+      rss_before_build = resident_bytes();
+    }
     say(fmt::format("building {}", spec));
     Built b;
     try {
-      b = (spec == embree.spec) ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
+      b = is_embree ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
     } catch (const std::bad_alloc&) {
-      // Scaling runs go as far as memory allows: a structure that does not
-      // fit is left out of this scene, the others still run.
-      std::fprintf(stderr, "bench: %s on %s: out of memory, skipped\n", spec.c_str(), scene.name.c_str());
+      // The estimate was too low: still a record of why, not a crash.
+      skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_gib(static_cast<double>(estimate))),
+           estimate, available_memory_bytes());
       continue;
     }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
@@ -182,12 +251,13 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         say(fmt::format("tracing {} {} rays with {} ({} thread{})", set.rays.size(), set.name, b.spec, threads,
                         threads == 1 ? "" : "s"));
         // Embree and the accelerator timed back to back, so drift on this
-        // shared machine affects both alike; both on their prepared rays.
-        const TraceTiming et = time_trace(*embree.accel, set, threads, o.repeats, embree_prepared[s].rays.get());
+        // shared machine affects both alike, both on their prepared rays
+        // (unless Embree had to go first to make room).
+        const TraceTiming et = embree_timing(s, threads);
         const TraceTiming t = is_reference ? et : time_trace(accel, set, threads, o.repeats, prep.rays.get());
         BenchRecord r;
         r.scene = scene.name;
-        r.triangles = scene.num_triangles();
+        r.triangles = triangles;
         r.accel = b.spec;
         r.ray_set = set.name;
         r.threads = threads;
@@ -214,6 +284,9 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
         r.trace_s = t.repeat_s;
         r.extra = b.stats.extra;
+        if (!embree_timed_first.empty()) r.extra["embree_timed_first"] = 1;
+        r.rss_before_build_bytes = rss_before_build;
+        r.rss_peak_bytes = peak_resident_bytes();
         // The reference counts as measured (ratio 1) even when not in the list.
         if (!best.count({s, threads})) {
           best[{s, threads}] = {1.0, embree.spec};
@@ -244,7 +317,8 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
                                          "rays",        "build_ms",    "bytes",          "bytes_per_triangle",
                                          "mrays_per_s", "mrays_min",   "mrays_max",      "prepare_ms", "embree_mrays_per_s",
                                          "ratio_to_embree", "best_embree", "ratio_to_best_embree", "embree_agreement", "nodes_per_ray", "tris_per_ray",
-                                         "sah_cost",    "nodes",       "leaves",         "max_depth"};
+                                         "sah_cost",    "nodes",       "leaves",         "max_depth",
+                                         "rss_before_build_bytes", "rss_peak_bytes"};
   auto quote = [](const std::string& v) {
     if (v.find_first_of(",\"\n") == std::string::npos) return v;
     std::string q = "\"";

@@ -35,6 +35,22 @@ struct BenchOptions {
   // When non-empty, these sets are traced instead of generating ray_sets
   // (`raylab bench --ray-file`).
   std::vector<RaySet> given_sets;
+  // Before each build: skip structures whose estimated peak memory
+  // (bench/memory_estimate.h) exceeds this fraction of the memory still
+  // available (bench/process_memory.h); 0 = never skip. When a structure only
+  // fits without the Embree reference resident, Embree is timed on every ray
+  // set first and released (records say so: extra embree_timed_first = 1).
+  double memory_headroom = 0.95;
+};
+
+// A structure left out of a scene, with the reason ("needs ~31.2 GiB by its
+// estimate, 20.1 GiB available").
+struct BenchSkip {
+  std::string scene, accel, reason;
+  size_t triangles = 0;
+  size_t estimated_bytes = 0, available_bytes = 0;
+
+  nlohmann::json to_json() const;
 };
 
 struct BenchRecord {
@@ -60,12 +76,17 @@ struct BenchRecord {
   bool has_tree = true;
   std::vector<double> trace_s;  // seconds of each timed repeat, in run order (raylab compare's test)
   std::map<std::string, double> extra;  // BuildStats::extra (structure-specific figures)
+  // Resident set of the process (from the OS) just before this structure's
+  // build, and its peak from then until this record (build, ray sets and
+  // traces; the scene, and Embree unless released, are part of both).
+  size_t rss_before_build_bytes = 0, rss_peak_bytes = 0;
 
   nlohmann::json to_json() const;
 };
 
 using BenchProgress = std::function<void(const std::string& message)>;
 using BenchRecordSink = std::function<void(const BenchRecord& record)>;
+using BenchSkipSink = std::function<void(const BenchSkip& skip)>;
 
 // Records in the order accelerator x ray set x threads, Embree modes first;
 // on_record (when set) is called as soon as each cell is finished, so callers
@@ -74,7 +95,7 @@ using BenchRecordSink = std::function<void(const BenchRecord& record)>;
 // on_record after the last Embree mode).
 std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::string>& accel_specs,
                                    const BenchOptions& options, const BenchProgress& progress = {},
-                                   const BenchRecordSink& on_record = {});
+                                   const BenchRecordSink& on_record = {}, const BenchSkipSink& on_skip = {});
 
 // The specs run_bench times on this scene (brute dropped above brute_max_triangles).
 std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& accel_specs, size_t triangles,

@@ -15,7 +15,8 @@ Inputs (each optional; a chart whose inputs are missing is skipped with a note):
 --dir DIR reads DIR/bench.json, DIR/verify*.json, DIR/stress*.json, DIR/sweep_*.json,
 DIR/scaling.json and DIR/equal_time/*.json. Charts go to --out (default: DIR/charts or
 ./charts) as NAME.png and NAME.svg; --table FILE writes a Markdown table of the bench
-records (threads 1) for the README.
+records (threads 1) for the README; --memory-table FILE one of the --scaling records with
+their peak resident memory and the skipped cells with their reasons.
 """
 import argparse
 import glob
@@ -247,41 +248,53 @@ def sweep_chart(recs, names, param, out, name, title, xlabel, written, header, m
 
 
 def chart_scaling(recs, out, written, header):
-    """Time per ray and build time against triangles, log-log, with N log N and log N guides."""
+    """Time per ray, build time and peak resident memory against triangles, log-log, with
+    N log N and log N guides; one line per accelerator and scene family (soup solid, others
+    dashed), so a 10^8-triangle terrain point sits next to the soups."""
     recs = single_thread(recs)
-    fam = family(recs[0]["scene"])
+    fams = sorted({family(r["scene"]) for r in recs}, key=lambda f: (f != "soup", f))
     sets = sorted({r["ray_set"] for r in recs})
     ray_set = "random" if "random" in sets else sets[0]
     by_acc = {}
     for r in recs:
         if r["ray_set"] == ray_set:
-            by_acc.setdefault(r["accel"], []).append(r)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
-    all_n = sorted({r["triangles"] for r in recs})
-    for acc, rs in sorted(by_acc.items()):
+            by_acc.setdefault((r["accel"], family(r["scene"])), []).append(r)
+    has_rss = any(r.get("rss_peak_bytes") for r in recs)
+    fig, axes = plt.subplots(1, 3 if has_rss else 2, figsize=(18 if has_rss else 12, 4.8))
+    all_n = sorted({r["triangles"] for r in recs if family(r["scene"]) == fams[0]})
+    colors = {}
+    for (acc, fam), rs in sorted(by_acc.items(), key=lambda kv: (fams.index(kv[0][1]), kv[0][0])):
         rs = sorted(rs, key=lambda r: r["triangles"])
         n = [r["triangles"] for r in rs]
-        axes[0].plot(n, [1e3 / r["mrays_per_s"] if r["mrays_per_s"] > 0 else float("nan") for r in rs], marker="o",
-                     ms=3, label=acc)
-        if acc != "embree" or True:
-            axes[1].plot(n, [max(r["build_ms"], 1e-3) for r in rs], marker="o", ms=3, label=acc)
+        style = dict(marker="o" if fam == fams[0] else "s", ms=3, ls="-" if fam == fams[0] else "--",
+                     label=acc if fam == fams[0] else f"{acc} ({fam})")
+        if acc in colors:
+            style["color"] = colors[acc]
+        line, = axes[0].plot(n, [1e3 / r["mrays_per_s"] if r["mrays_per_s"] > 0 else float("nan") for r in rs], **style)
+        colors.setdefault(acc, line.get_color())
+        style["color"] = colors[acc]
+        axes[1].plot(n, [max(r["build_ms"], 1e-3) for r in rs], **style)
+        if has_rss:
+            axes[2].plot(n, [r.get("rss_peak_bytes", 0) / 2**30 or float("nan") for r in rs], **style)
     n = np.array(all_n, dtype=float)
-    if len(n) >= 2:
+    first = [sorted(v, key=lambda r: r["triangles"]) for (a, f), v in by_acc.items() if f == fams[0]]
+    if len(n) >= 2 and first:
         # Guides anchored at the geometric mean of the first points.
-        first_t = geomean([1e3 / rs[0]["mrays_per_s"] for rs in
-                           (sorted(v, key=lambda r: r["triangles"]) for v in by_acc.values()) if rs[0]["mrays_per_s"] > 0])
+        first_t = geomean([1e3 / rs[0]["mrays_per_s"] for rs in first if rs[0]["mrays_per_s"] > 0])
         axes[0].plot(n, first_t * np.log2(n) / math.log2(n[0]), "k:", lw=1.2, label="log N guide")
-        first_b = geomean([max(sorted(v, key=lambda r: r["triangles"])[0]["build_ms"], 1e-3) for v in by_acc.values()])
+        first_b = geomean([max(rs[0]["build_ms"], 1e-3) for rs in first])
         axes[1].plot(n, first_b * (n * np.log2(n)) / (n[0] * math.log2(n[0])), "k:", lw=1.2, label="N log N guide")
     axes[0].set_ylabel(f"time per ray (ns), {ray_set} rays, 1 thread")
     axes[1].set_ylabel("build time (ms), median of builds")
+    if has_rss:
+        axes[2].set_ylabel("peak resident set of the process (GiB)")
     for ax in axes:
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel(f"triangles ({fam})")
+        ax.set_xlabel(f"triangles ({', '.join(fams)})")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(f"Scaling with scene size ({fam})")
+    fig.suptitle(f"Scaling with scene size ({', '.join(fams)})")
     footer(fig, header)
     save(fig, out, "scaling", written)
 
@@ -395,6 +408,29 @@ def markdown_scaling_table(recs):
     return "\n".join(lines) + "\n"
 
 
+def markdown_memory_table(report):
+    """Every cell of a scaling report with its peak resident set, then the skipped cells and why."""
+    recs = report.get("records", [])
+    lines = ["| scene | triangles | accel | threads | build ms | peak RSS GiB | "
+             + " | ".join(f"{s} Mrays/s (ratio)" for s in sorted({r["ray_set"] for r in recs})) + " |"]
+    sets = sorted({r["ray_set"] for r in recs})
+    lines.append("|---|---:|---|---:|---:|---:|" + "---:|" * len(sets))
+    cells = {}
+    for r in recs:
+        cells.setdefault((r["scene"], r["triangles"], r["accel"], r["threads"]), {})[r["ray_set"]] = r
+    for (scene, tris, acc, thr), by_set in cells.items():
+        any_r = next(iter(by_set.values()))
+        note = " (Embree timed first)" if any_r.get("extra", {}).get("embree_timed_first") else ""
+        rss = any_r.get("rss_peak_bytes", 0) / 2**30
+        row = [f"{by_set[s]['mrays_per_s']:.2f} ({by_set[s]['ratio_to_embree']:.2f})" if s in by_set else "" for s in sets]
+        lines.append(f"| {scene} | {tris:,} | {acc}{note} | {thr} | {fmt_ms(any_r['build_ms'])} | {rss:.1f} | "
+                     + " | ".join(row) + " |")
+    for sk in report.get("skipped", []):
+        lines.append(f"| {sk['scene']} | {sk['triangles']:,} | {sk['accel']} | | skipped: {sk['reason']} | | "
+                     + " | ".join("" for _ in sets) + " |")
+    return "\n".join(lines) + "\n"
+
+
 # ---------------------------------------------------------------- main
 
 def main():
@@ -408,6 +444,7 @@ def main():
     ap.add_argument("--render", action="append", default=[])
     ap.add_argument("--out")
     ap.add_argument("--table")
+    ap.add_argument("--memory-table", help="Markdown table of the --scaling records with peak memory and skips")
     a = ap.parse_args()
     if a.dir:
         d = a.dir
@@ -425,6 +462,10 @@ def main():
             print(f"plot.py: error: no such file {f}", file=sys.stderr)
             return 2
     written, skipped = [], []
+    if a.memory_table and a.scaling:
+        with open(a.memory_table + ".tmp", "w") as f:
+            f.write(markdown_memory_table(load(a.scaling)))
+        os.replace(a.memory_table + ".tmp", a.memory_table)
     header = load(a.bench) if a.bench else {}
     bench = records(a.bench) if a.bench else []
     if bench:

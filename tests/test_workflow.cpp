@@ -1,0 +1,145 @@
+// The benchmark workflow (workflow/): the per-cell reports merged by
+// merge_records.py equal one `raylab bench` run over the same matrix (same
+// cells in the same order, same hits, same CSV columns); compare_records.py
+// finds a changed hit; the Snakefile parses and plans the quick preset.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/test_util.h"
+
+namespace raylab {
+namespace {
+
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+struct Shell {
+  int exit_code = -1;
+  std::string output;
+};
+
+Shell sh(const std::string& command) {
+  Shell r;
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
+  const int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+nlohmann::json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+std::vector<std::string> lines(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+const std::string kSource = RAYLAB_SOURCE_DIR;
+const std::string kCommon =
+    " --scene 'soup:n=400;terrain:n=8' --ray-sets primary,random --size 16x16 --rays 300 --repeats 1 --quiet";
+
+TEST(Workflow, MergedCellsEqualOneRunOverTheMatrix) {
+  const auto dir = test::temp_dir("workflow_merge");
+  const std::string bin = RAYLAB_BINARY;
+  ASSERT_EQ(sh(bin + " bench --accel embree,bvh,grid --threads 1" + kCommon + " --json " + (dir / "one.json").string()).exit_code, 0);
+  std::string cells;
+  for (const char* accel : {"embree", "bvh", "grid"}) {
+    const auto cell = dir / (std::string(accel) + ".json");
+    ASSERT_EQ(sh(bin + " bench --accel " + accel + " --threads 1" + kCommon + " --json " + cell.string()).exit_code, 0);
+    cells += " " + cell.string();
+  }
+  const auto merged = dir / "merged.json";
+  const Shell m = sh("/usr/bin/python3 " + kSource + "/workflow/scripts/merge_records.py --out " + merged.string() + cells);
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+
+  const auto one = read_json(dir / "one.json"), all = read_json(merged);
+  ASSERT_EQ(all["records"].size(), one["records"].size());
+  ASSERT_EQ(all["records"].size(), 2u * 3u * 2u);  // scenes x accels x ray sets
+  for (size_t i = 0; i < one["records"].size(); ++i) {
+    const auto& a = one["records"][i];
+    const auto& b = all["records"][i];
+    for (const char* key : {"scene", "accel", "ray_set", "threads", "rays", "triangles", "embree_agreement",
+                            "nodes_per_ray", "tris_per_ray", "bytes", "nodes", "leaves"})
+      EXPECT_EQ(a[key], b[key]) << "record " << i << " " << key;
+  }
+  EXPECT_EQ(all["options"]["accels"], one["options"]["accels"]);
+  EXPECT_EQ(all["options"]["scenes"], one["options"]["scenes"]);
+  EXPECT_TRUE(all["complete"].get<bool>());
+  EXPECT_EQ(all["cells"], 3);
+  EXPECT_EQ(all["revision"], one["revision"]);
+
+  // CSV: the same header, one row per record, rows in the JSON's order.
+  const auto csv_one = lines(dir / "one.csv"), csv_all = lines(dir / "merged.csv");
+  ASSERT_EQ(csv_all.size(), csv_one.size());
+  EXPECT_EQ(csv_all[0], csv_one[0]);
+  for (size_t i = 1; i < csv_all.size(); ++i) {
+    const auto& r = all["records"][i - 1];
+    EXPECT_THAT(csv_all[i], HasSubstr("," + r["accel"].get<std::string>() + "," + r["ray_set"].get<std::string>() + ","))
+        << "row " << i;
+  }
+
+  // compare_records: a run agrees with itself, and a changed hit is found.
+  const auto a_dir = dir / "a", b_dir = dir / "b";
+  fs::create_directories(a_dir);
+  fs::create_directories(b_dir);
+  fs::copy_file(merged, a_dir / "bench.json");
+  auto changed = all;
+  changed["records"][3]["embree_agreement"] = 0.5;
+  std::ofstream(b_dir / "bench.json") << changed.dump();
+  const std::string compare = "/usr/bin/python3 " + kSource + "/workflow/scripts/compare_records.py ";
+  const Shell same = sh(compare + a_dir.string() + " " + a_dir.string());
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_THAT(same.output, HasSubstr("same cells and hits (bench.json 12)"));
+  const Shell diff = sh(compare + a_dir.string() + " " + b_dir.string());
+  EXPECT_EQ(diff.exit_code, 1) << diff.output;
+  EXPECT_THAT(diff.output, HasSubstr("embree_agreement"));
+  fs::remove_all(dir);
+}
+
+// The merge refuses inputs that are not bench reports rather than writing a half-merged file.
+TEST(Workflow, MergeRejectsAForeignReport) {
+  const auto dir = test::temp_dir("workflow_bad");
+  std::ofstream(dir / "x.json") << R"({"command": "verify", "records": []})";
+  std::ofstream(dir / "x.csv") << "scene\n";
+  const Shell m = sh("/usr/bin/python3 " + kSource + "/workflow/scripts/merge_records.py --out " +
+                     (dir / "m.json").string() + " " + (dir / "x.json").string());
+  EXPECT_NE(m.exit_code, 0);
+  EXPECT_THAT(m.output, HasSubstr("not a `raylab bench` report"));
+  EXPECT_FALSE(fs::exists(dir / "m.json"));
+  fs::remove_all(dir);
+}
+
+// The Snakefile parses and plans the quick preset: every cell of the matrix is a job
+// (without the optional ../shared meshes, so the count does not depend on them).
+TEST(Workflow, SnakefilePlansTheQuickPreset) {
+  ASSERT_EQ(sh("command -v snakemake").exit_code, 0) << "snakemake not installed (bash scripts/install-deps.sh)";
+  const auto dir = test::temp_dir("workflow_plan");
+  const Shell r = sh("cd " + kSource + " && snakemake -s workflow/Snakefile -n --nolock --cores 2 --config raylab=" +
+                     std::string(RAYLAB_BINARY) + " out=" + dir.string() + " node_cores=2 shared_scenes_marker=/nonexistent > " + (dir / "plan.txt").string() + " 2>&1; rc=$?; tr -s ' ' < " + (dir / "plan.txt").string() + "; exit $rc");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // 3 scenes x 8 accelerator specs x threads {1, 2}; 4 soups x 6 structures.
+  EXPECT_THAT(r.output, HasSubstr("bench_cell 48 2 2"));
+  EXPECT_THAT(r.output, HasSubstr("scaling_cell 24 2 2"));
+  EXPECT_THAT(r.output, HasSubstr("merge_bench 1 1 1"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace raylab
