@@ -1,5 +1,6 @@
 #include "accel/registry.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -133,13 +134,21 @@ std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, cons
 }
 
 std::string describe_accelerators() {
+  // One column for "name=default" and "stat key" across all accelerators, so
+  // the help texts line up.
+  size_t width = 0;
+  for (const auto& info : accelerator_registry()) {
+    for (const auto& p : info.params) width = std::max(width, p.name.size() + 1 + p.default_value.size());
+    for (const auto& st : info.stats) width = std::max(width, st.key.size() + 5);
+  }
   std::string s;
   for (const auto& info : accelerator_registry()) {
-    s += fmt::format("{:<10} {}\n", info.name, info.help);
-    if (info.describe) s += fmt::format("    ({})\n", description_text(info.describe()));
+    s += fmt::format("{:<10} {}", info.name, info.help);
+    if (info.describe) s += fmt::format(" [{}]", description_text(info.describe()));
+    s += "\n";
     for (const auto& p : info.params)
-      s += fmt::format("    {}={:<10} {}\n", p.name, p.default_value, p.help);
-    for (const auto& st : info.stats) s += fmt::format("    stat {:<18} {}\n", st.key, st.help);
+      s += fmt::format("    {:<{}}  {}\n", p.name + "=" + p.default_value, width, p.help);
+    for (const auto& st : info.stats) s += fmt::format("    {:<{}}  {}\n", "stat " + st.key, width, st.help);
   }
   return s;
 }
