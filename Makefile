@@ -21,7 +21,7 @@ test: build
 
 demo: build
 	./$(BUILD)/raylab render --scene cornell --accel bvh --spp 64 --size 512x512 --out out/cornell.png
-	./$(BUILD)/raylab bench --scene cornell --accel all --rays primary,random --quiet
+	./$(BUILD)/raylab bench --scene cornell --accel all --ray-sets primary,random --quiet
 
 # The benchmark study (workflow/Snakefile, configured by workflow/config.yaml): one job per
 # cell, merged into out/bench/*.json, *.csv, charts and summary.md; the quick preset also

@@ -1,5 +1,7 @@
 #include "accel/registry.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "accel/brute/brute_accel.h"
@@ -99,11 +101,15 @@ std::vector<std::string> apply_sweep(const std::vector<std::string>& specs, cons
 }
 
 std::string describe_accelerators() {
+  // One column for "name=default" across all accelerators, so the help texts line up.
+  size_t width = 0;
+  for (const auto& info : accelerator_registry())
+    for (const auto& p : info.params) width = std::max(width, p.name.size() + 1 + p.default_value.size());
   std::string s;
   for (const auto& info : accelerator_registry()) {
     s += fmt::format("{:<10} {}\n", info.name, info.help);
     for (const auto& p : info.params)
-      s += fmt::format("    {}={:<10} {}\n", p.name, p.default_value, p.help);
+      s += fmt::format("    {:<{}}  {}\n", p.name + "=" + p.default_value, width, p.help);
   }
   return s;
 }

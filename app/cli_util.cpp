@@ -1,9 +1,16 @@
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "app/commands.h"
+#include "bench/trace.h"
 
 namespace raylab::cli {
 
@@ -45,6 +52,82 @@ std::vector<int> parse_int_list(const std::string& text, const char* what) {
   }
   if (out.empty()) throw std::invalid_argument(fmt::format("no {} given", what));
   return out;
+}
+
+
+std::string pick_scene(const std::string& command, const std::string& option, const std::string& positional,
+                       const std::string& fallback) {
+  if (!option.empty() && !positional.empty())
+    throw std::invalid_argument(fmt::format(
+        "{} takes one scene, given either positionally or with --scene, not both (got '{}' and '{}')", command,
+        positional, option));
+  if (!positional.empty()) return positional;
+  return option.empty() ? fallback : option;
+}
+
+CLI::Option* add_threads_option(CLI::App* cmd, int& threads) {
+  return cmd->add_option("-t,--threads", threads, "worker threads (0 = all cores)")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            int n = 0;
+            const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+            if (ec != std::errc() || p != v.data() + v.size() || n < 0 || n > 4096)
+              return fmt::format("takes one thread count from 0 (all cores) to 4096, not '{}'", v);
+            return {};
+          },
+          "COUNT"));
+}
+
+CLI::Option* add_ray_count_option(CLI::App* cmd, size_t& rays, const std::string& help,
+                                  const std::string& names) {
+  return cmd->add_option(names, rays, help)
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            size_t n = 0;
+            const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+            if (ec == std::errc() && p == v.data() + v.size() && n >= 1 && n <= (size_t{1} << 28)) return {};
+            if (!v.empty() && std::isalpha(static_cast<unsigned char>(v[0])))
+              return fmt::format("takes a ray count (e.g. --rays 65536); to choose ray sets such as '{}' use "
+                                 "--ray-sets NAMES",
+                                 v);
+            return fmt::format("takes a ray count from 1 to 268435456, not '{}'", v);
+          },
+          "N"));
+}
+
+std::vector<int> parse_thread_list(const std::string& text) {
+  std::vector<int> out;
+  for (const auto& item : parse_name_list(text)) {
+    int v = -1;
+    const auto [p, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (ec != std::errc() || p != item.data() + item.size() || v < 0 || v > 4096)
+      throw std::invalid_argument(
+          fmt::format("invalid thread count '{}' (expected counts from 0 = all cores to 4096, comma separated)", item));
+    if (v == 0) v = hardware_threads();
+    if (std::find(out.begin(), out.end(), v) == out.end()) out.push_back(v);
+  }
+  if (out.empty()) throw std::invalid_argument("no thread count given");
+  return out;
+}
+
+std::string lower_extension_of(const std::string& path) {
+  const auto dot = path.rfind('.');
+  const auto slash = path.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+bool stderr_is_terminal() { return ::isatty(::fileno(stderr)) != 0; }
+
+std::string format_duration(double s) {
+  if (!(s >= 0) || s > 1e7) return "?";
+  if (s < 60) return fmt::format("{:.0f} s", std::ceil(s));
+  if (s < 3600) return fmt::format("{} min {:02} s", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+  return fmt::format("{} h {:02} min", static_cast<int>(s / 3600), static_cast<int>(s / 60) % 60);
 }
 
 }  // namespace raylab::cli

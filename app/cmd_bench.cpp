@@ -1,16 +1,19 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <set>
 
 #include <fmt/format.h>
 
 #include "accel/registry.h"
 #include "accel/util/atomic_file.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "bench/bench_run.h"
 #include "bench/embree_selfcheck.h"
 #include "bench/ray_file.h"
@@ -21,13 +24,6 @@
 namespace raylab::cli {
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void on_sigint(int) {
-  g_stop.store(true);
-  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends the process at once
-}
 
 // Presets: defaults for every option not given on the command line.
 struct Preset {
@@ -90,8 +86,8 @@ std::string csv_path_for(const std::string& json) {
 
 Runner add_bench(CLI::App& app) {
   struct Opts {
-    std::string accel = "embree,bvh", rays = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
-    std::vector<std::string> scenes, scales, sweeps;
+    std::string accel = "embree,bvh", ray_sets = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
+    std::vector<std::string> scenes, positional_scenes, scales, sweeps;
     size_t random_rays = 262144, brute_max_tris = 0;
     double memory_headroom = 0.95;
     int repeats = 5, build_repeats = 1;
@@ -100,18 +96,22 @@ Runner add_bench(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("bench", "time accelerators on the same rays, as ratios to Embree");
+  cmd->add_option("scene", o->positional_scenes,
+                  "scenes: procedural specs, mesh files or JSON scene files (several allowed; default cornell)");
   cmd->add_option("--scene", o->scenes,
-                  "scene specs or mesh files (repeatable; ';' or ',' separated lists; default cornell)");
+                  "scene specs or mesh files (repeatable; ';' or ',' separated lists), as the positional arguments");
   cmd->add_option("--scale", o->scales,
                   "FAMILY:PARAM=v1,v2,...: one scene per value of a size parameter, e.g. soup:n=1000,10000 (repeatable)");
   cmd->add_option("--preset", o->preset,
                   "quick or full: defaults for the options not given (run from the checkout, the scenes include the "
                   "interior views of scenes/shared when ../shared/scenes is present)");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "ray sets: primary, diffuse, shadow, random")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "thread counts, comma separated (default: 1 and all cores)");
+  cmd->add_option("--ray-sets", o->ray_sets, "ray sets, comma separated: primary, diffuse, shadow, random")
+      ->capture_default_str();
+  cmd->add_option("-t,--threads", o->threads, "thread counts, comma separated, 0 = all cores (default: 1 and all cores)");
   cmd->add_option("--size", o->size, "primary rays: image size WIDTHxHEIGHT")->capture_default_str();
-  cmd->add_option("--random-rays", o->random_rays, "number of random rays")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
+  add_ray_count_option(cmd, o->random_rays, "rays per generated set (random; primary rays are one per pixel of --size)",
+                       "--rays,--random-rays");
   cmd->add_option("--repeats", o->repeats, "timed trace repeats (median, min and max reported)")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--build-repeats", o->build_repeats, "builds per accelerator (median reported)")->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_option("--brute-max-tris", o->brute_max_tris, "skip brute on scenes with more triangles (0 = never skip)")->capture_default_str();
@@ -121,11 +121,11 @@ Runner add_bench(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--sweep", o->sweeps, "PARAM=v1,v2,...: one run per value for every accelerator with PARAM (repeatable)");
-  cmd->add_option("--json", o->json, "write records to this JSON file (rewritten after every cell)");
+  cmd->add_option("-o,--json", o->json, "write records to this JSON file (rewritten after every cell)");
   cmd->add_option("--csv", o->csv, "write records to this CSV file (default: next to --json, .csv)");
-  cmd->add_flag("--quiet", o->quiet, "no progress line");
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
   cmd->add_option("--ray-file", o->ray_file,
-                  "trace the rays of this ray file (raylab rays, docs/ray-file.md) instead of --rays; needs one --scene");
+                  "trace the rays of this ray file (raylab rays, docs/ray-file.md) instead of --ray-sets; needs one scene");
   cmd->add_flag("--embree-selfcheck", o->selfcheck,
                 "time the embree accelerator against a plain rtcIntersect1/rtcOccluded1 loop on the same prepared rays "
                 "(one thread, thread CPU time, median of --repeats) and print the ratios; no other timing");
@@ -134,12 +134,12 @@ Runner add_bench(CLI::App& app) {
     if (!o->preset.empty()) {
       const Preset p = find_preset(o->preset);
       auto unset = [&](const char* name) { return cmd->count(name) == 0; };
-      if (unset("--scene") && unset("--scale")) o->scenes = {p.scenes};
+      if (unset("--scene") && unset("--scale") && o->positional_scenes.empty()) o->scenes = {p.scenes};
       if (unset("--accel")) o->accel = p.accel;
-      if (unset("--rays")) o->rays = p.rays;
+      if (unset("--ray-sets")) o->ray_sets = p.rays;
       if (unset("--threads")) o->threads = p.threads;
       if (unset("--size")) o->size = p.size;
-      if (unset("--random-rays")) o->random_rays = p.random_rays;
+      if (unset("--rays")) o->random_rays = p.random_rays;
       if (unset("--repeats")) o->repeats = p.repeats;
       if (unset("--build-repeats")) o->build_repeats = p.build_repeats;
       if (unset("--brute-max-tris")) o->brute_max_tris = p.brute_max_tris;
@@ -152,7 +152,7 @@ Runner add_bench(CLI::App& app) {
         throw std::invalid_argument(fmt::format("--sweep {}: expected PARAM=v1,v2,...", sweep));
       specs = apply_sweep(specs, sweep.substr(0, eq), parse_name_list(sweep.substr(eq + 1)));
     }
-    std::vector<std::string> scene_specs;
+    std::vector<std::string> scene_specs = o->positional_scenes;
     for (const auto& s : o->scenes)
       for (const auto& one : split_spec_list(s)) scene_specs.push_back(one);
     for (const auto& s : o->scales)
@@ -161,8 +161,8 @@ Runner add_bench(CLI::App& app) {
     std::vector<RaySet> file_sets;
     if (!o->ray_file.empty()) {
       if (scene_specs.size() != 1)
-        throw std::invalid_argument("--ray-file: give exactly one --scene (the scene the rays were made for)");
-      if (cmd->count("--rays")) throw std::invalid_argument("--ray-file replaces --rays: give one of them");
+        throw std::invalid_argument("--ray-file: give exactly one scene (the scene the rays were made for)");
+      if (cmd->count("--ray-sets")) throw std::invalid_argument("--ray-file replaces --ray-sets: give one of them");
       file_sets.push_back(read_ray_file(o->ray_file).set);
     }
 
@@ -171,7 +171,7 @@ Runner add_bench(CLI::App& app) {
       std::tie(rso.width, rso.height) = parse_size(o->size);
       rso.random_count = o->random_rays;
       rso.seed = o->seed;
-      const auto names = parse_name_list(o->rays);
+      const auto names = parse_name_list(o->ray_sets);
       std::vector<SelfCheckRow> rows;
       for (const auto& spec : scene_specs) {
         const Scene scene = load_scene(spec);
@@ -197,8 +197,8 @@ Runner add_bench(CLI::App& app) {
     }
 
     BenchOptions bo;
-    bo.ray_sets = parse_name_list(o->rays);
-    bo.threads = parse_int_list(o->threads, "thread count");
+    bo.ray_sets = parse_name_list(o->ray_sets);
+    bo.threads = parse_thread_list(o->threads);
     std::tie(bo.width, bo.height) = parse_size(o->size);
     bo.random_rays = o->random_rays;
     bo.repeats = o->repeats;
@@ -206,7 +206,6 @@ Runner add_bench(CLI::App& app) {
     bo.brute_max_triangles = o->brute_max_tris;
     bo.seed = o->seed;
     bo.memory_headroom = o->memory_headroom;
-    bo.stop = &g_stop;
     bo.given_sets = file_sets;
     if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
     const std::string csv = !o->csv.empty() ? o->csv : (o->json.empty() ? std::string() : csv_path_for(o->json));
@@ -235,11 +234,11 @@ Runner add_bench(CLI::App& app) {
 
     const bool show = !o->quiet;
     const bool tty = show && isatty(fileno(stderr));
-    g_stop.store(false);
-    auto previous = std::signal(SIGINT, on_sigint);
+    InterruptGuard interrupt;  // Ctrl-C: finish the current cell, keep the records
+    bo.stop = interrupt.flag();
     size_t done_scenes = 0;
     for (const auto& spec : scene_specs) {
-      if (g_stop.load()) break;
+      if (interrupt.interrupted()) break;
       if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
       const Scene scene = load_scene(spec);
       const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
@@ -249,16 +248,30 @@ Runner add_bench(CLI::App& app) {
                      scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
       size_t done = 0;
       BenchProgress progress;
+      const auto scene_start = std::chrono::steady_clock::now();
       if (tty)
         progress = [&](const std::string& m) {
-          std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu] %s", done_scenes + 1, scene_specs.size(), done + 1,
-                       cells, m.c_str());
+          const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_start).count();
+          const std::string eta =
+              done > 0 && cells > done ? fmt::format(", ~{} left in this scene", format_duration(elapsed / done * (cells - done)))
+                                       : std::string();
+          std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu, %s%s] %s", done_scenes + 1, scene_specs.size(),
+                       done + 1, cells, format_duration(elapsed).c_str(), eta.c_str(), m.c_str());
           std::fflush(stderr);
         };
+      std::set<std::string> noted;
+      const size_t primary_rays = static_cast<size_t>(bo.width) * bo.height;
       const auto records = run_bench(scene, specs, bo, progress, [&](const BenchRecord& r) {
         ++done;
         all.push_back(r);
         save(false);
+        const size_t asked = r.ray_set == "random" ? bo.random_rays : primary_rays;
+        if (show && r.rays != asked && noted.insert(r.ray_set).second)
+          std::fprintf(stderr, "%snote: %s: ray set '%s' holds %zu rays, not %zu%s\n", tty ? "\r\033[K" : "",
+                       r.scene.c_str(), r.ray_set.c_str(), r.rays, asked,
+                       r.ray_set == "diffuse" || r.ray_set == "shadow"
+                           ? " (its rays start from primary hits; primary rays that miss give none)"
+                           : "");
         if (show && !tty)
           std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
                        done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
@@ -280,13 +293,12 @@ Runner add_bench(CLI::App& app) {
       std::fflush(stdout);
       ++done_scenes;
     }
-    std::signal(SIGINT, previous == SIG_ERR ? SIG_DFL : previous);
-    const bool interrupted = g_stop.load();
+    const bool interrupted = interrupt.interrupted();
     save(!interrupted);
     if (interrupted) {
       std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", all.size(),
                    o->json.empty() ? "" : " in ", o->json.c_str());
-      return 130;
+      return kExitInterrupted;
     }
     return 0;
   };

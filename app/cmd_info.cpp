@@ -1,10 +1,14 @@
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+
+#include <fmt/format.h>
 
 #include "accel/registry.h"
 #include "accel/util/timer.h"
 #include "app/commands.h"
+#include "bench/bench_run.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {
@@ -21,26 +25,42 @@ void print_build_stats(const Scene& s, const std::string& accel_list, int repeat
     }
     std::sort(runs.begin(), runs.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     const BuildStats& st = runs[runs.size() / 2].second;
-    std::printf("accel      %s\n  build_ms   %.2f (median of %d)\n  bytes      %zu\n  nodes      %zu\n  leaves     %zu\n"
-                "  max_depth  %d\n  avg_depth  %.2f\n  sah_cost   %.4g\n",
-                spec.c_str(), st.build_ms, repeats, st.bytes, st.nodes, st.leaves, st.max_depth, st.avg_depth, st.sah_cost);
-    for (const auto& [key, value] : st.extra) std::printf("  %-18s %.6g\n", key.c_str(), value);
+    // Structures that report no tree shape (Embree, brute) show n/a, not 0 or nan.
+    const bool tree = st.nodes > 0 || st.leaves > 0;
+    auto or_na = [](bool ok, const std::string& v) { return ok ? v : std::string("n/a"); };
+    size_t width = 10;
+    for (const auto& [key, value] : st.extra) width = std::max(width, key.size());
+    auto row = [&](const std::string& key, const std::string& value) {
+      std::printf("  %-*s %s\n", static_cast<int>(width), key.c_str(), value.c_str());
+    };
+    std::printf("accel      %s\n", spec.c_str());
+    row("build_ms", fmt::format("{:.2f} (median of {})", st.build_ms, repeats));
+    row("bytes", std::to_string(st.bytes));
+    row("nodes", or_na(tree, std::to_string(st.nodes)));
+    row("leaves", or_na(tree, std::to_string(st.leaves)));
+    row("max_depth", or_na(tree, std::to_string(st.max_depth)));
+    row("avg_depth", or_na(tree, fmt::format("{:.2f}", st.avg_depth)));
+    row("sah_cost", or_na(std::isfinite(st.sah_cost), fmt::format("{:.4g}", st.sah_cost)));
+    for (const auto& [key, value] : st.extra) row(key, fmt::format("{:.6g}", value));
+    const std::string warning = depth_cap_warning(st);
+    std::fflush(stdout);
+    if (!warning.empty()) std::fprintf(stderr, "raylab info: warning: %s: %s\n", spec.c_str(), warning.c_str());
   }
 }
 
 Runner add_info(CLI::App& app) {
-  auto scene_spec = std::make_shared<std::string>("cornell");
+  auto scene_spec = std::make_shared<std::string>();
   auto positional = std::make_shared<std::string>();
   auto accel_list = std::make_shared<std::string>();
   auto repeats = std::make_shared<int>(1);
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
-  auto* scene_opt = cmd->add_option("--scene", *scene_spec, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
-  cmd->add_option("scene", *positional, "the scene, as for --scene")->excludes(scene_opt);
+  cmd->add_option("scene", *positional, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
+  cmd->add_option("--scene", *scene_spec, "the scene, as the positional argument");
   cmd->add_option("--accel", *accel_list, "also build these accelerators and print their build figures");
   cmd->add_option("--build-repeats", *repeats, "builds per accelerator (median reported)")->check(CLI::Range(1, 100));
   return [scene_spec, positional, accel_list, repeats]() {
     Timer t;
-    const Scene s = load_scene(positional->empty() ? *scene_spec : *positional);
+    const Scene s = load_scene(pick_scene("info", *scene_spec, *positional, "cornell"));
     const double ms = t.ms();
     const Aabb b = s.bounds();
     size_t emitters = 0;

@@ -17,23 +17,29 @@ namespace raylab::cli {
 
 Runner add_rays(CLI::App& app) {
   struct Opts {
-    std::string scene, set, size = "512x512", out;
+    std::string scene, positional_scene, set, size = "512x512", out;
     size_t count = 262144;
     uint64_t seed = 1;
     bool hits = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("rays", "write a ray set (as raylab bench makes it) to a ray file");
-  cmd->add_option("--scene", o->scene, "scene spec, scene file or mesh file")->required();
-  cmd->add_option("--set", o->set, "primary, diffuse, shadow or random")->required();
+  // The vocabulary of verify and bench (issue 19): a positional scene,
+  // --ray-sets for which set, --rays for how many, -o for the output; the
+  // first names (--set, --count, --out) are kept as synonyms.
+  cmd->add_option("scene", o->positional_scene, "the scene: procedural spec, scene file or mesh file");
+  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
+  cmd->add_option("--ray-sets,--set", o->set, "the ray set: primary, diffuse, shadow or random (one)")->required();
   cmd->add_option("--size", o->size, "primary rays (and the diffuse/shadow rays from their hits): image size WIDTHxHEIGHT")
       ->capture_default_str();
-  cmd->add_option("--count", o->count, "random rays: how many")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
+  add_ray_count_option(cmd, o->count, "random rays: how many", "--rays,--count");
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   cmd->add_flag("--hits", o->hits, "append the reference's answers (single-ray Embree): hits, or occlusion for shadow rays");
-  cmd->add_option("--out", o->out, "ray file to write (docs/ray-file.md)")->required();
+  cmd->add_option("-o,--out", o->out, "ray file to write (docs/ray-file.md)")->required();
 
   return [o]() {
+    if (o->set.find(',') != std::string::npos)
+      throw std::invalid_argument(fmt::format("rays writes one ray set per file, '{}' names several", o->set));
     bool known = false;
     for (const auto& k : ray_set_names()) known |= k == o->set;
     if (!known) throw std::invalid_argument(fmt::format("unknown ray set '{}' (available: primary, diffuse, shadow, random)", o->set));
@@ -41,7 +47,9 @@ Runner add_rays(CLI::App& app) {
     std::tie(rso.width, rso.height) = parse_size(o->size);
     rso.random_count = o->count;
     rso.seed = o->seed;
-    const Scene scene = load_scene(o->scene);
+    const std::string scene_arg = pick_scene("rays", o->scene, o->positional_scene, "");
+    if (scene_arg.empty()) throw std::invalid_argument("rays needs a scene (positional or --scene)");
+    const Scene scene = load_scene(scene_arg);
     // The same reference and the same generator as `raylab bench`.
     auto reference = make_accelerator("embree");
     reference->build(scene.mesh);

@@ -1,6 +1,5 @@
-#include <unistd.h>
-
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include <fmt/format.h>
@@ -8,6 +7,7 @@
 
 #include "accel/registry.h"
 #include "accel/util/timer.h"
+#include "app/camera_options.h"
 #include "app/commands.h"
 #include "bench/report.h"
 #include "scenes/scene_registry.h"
@@ -15,64 +15,105 @@
 
 namespace raylab::cli {
 
+namespace {
+
+// out/<name>.png from the scene argument: a file's stem ("bunny" for
+// ../shared/scenes/bunny.ply), or the procedural spec with its punctuation
+// turned into '_' ("sphereflake_level_2").
+std::string default_output_name(const std::string& scene_arg) {
+  std::string stem = scene_arg;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(scene_arg, ec)) stem = std::filesystem::path(scene_arg).stem().string();
+  std::string out;
+  for (char c : stem) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+    if (keep) out += c;
+    else if (!out.empty() && out.back() != '_') out += '_';
+  }
+  while (!out.empty() && out.back() == '_') out.pop_back();
+  return "out/" + (out.empty() ? std::string("render") : out) + ".png";
+}
+
+}  // namespace
+
 Runner add_render(CLI::App& app) {
   struct Opts {
-    std::string scene = "cornell", positional_scene, accel = "bvh", size, out, json;
+    std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background;
     int spp = 64, threads = 0, max_depth = 64;
     uint64_t seed = 1;
     bool quiet = false;
   };
   auto o = std::make_shared<Opts>();
-  CLI::App* cmd = app.add_subcommand("render", "path-trace a scene to PNG (or PFM)");
-  auto* scene_opt = cmd->add_option("--scene", o->scene, "procedural scene spec, mesh file or JSON scene file")->capture_default_str();
-  cmd->add_option("scene", o->positional_scene, "the scene, as for --scene (e.g. scenes/examples/cornell_flake.json)")
-      ->excludes(scene_opt);
-  cmd->add_option("--accel", o->accel, "accelerator spec")->capture_default_str();
-  cmd->add_option("--spp", o->spp, "samples per pixel")->capture_default_str()->check(CLI::Range(1, 1 << 20));
+  CLI::App* cmd = app.add_subcommand("render", "path-trace a scene to PNG, EXR or PFM");
+  cmd->add_option("scene", o->positional_scene,
+                  "the scene: procedural spec, mesh file or JSON scene file (default cornell; see raylab scenes)");
+  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
+  cmd->add_option("--accel", o->accel, "one accelerator spec (see raylab accels)")->capture_default_str();
+  cmd->add_option("-s,--spp", o->spp, "samples per pixel")->capture_default_str()->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--size", o->size, "image size WIDTHxHEIGHT (default: the scene's view)");
-  cmd->add_option("--out", o->out, "output image, .png or .pfm (default: out/<scene>.png)");
+  cmd->add_option("-o,--out", o->out,
+                  "output image: .png (8-bit sRGB), .exr (linear half float) or .pfm (linear float); "
+                  "default out/<scene name>.png");
+  cmd->add_option("--camera", o->camera,
+                  "camera override, any of from=x,y,z,at=x,y,z,up=x,y,z,fov=deg (e.g. --camera from=0,1,4,at=0,0.5,0)");
+  cmd->add_option("--up", o->up, "the up axis of a mesh file: x, y, z, -x, -y, -z (Z-up files: --up z); re-frames the camera");
+  cmd->add_option("--background", o->background, "radiance of rays leaving the scene: one value (grey) or r,g,b");
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  add_threads_option(cmd, o->threads);
   cmd->add_option("--max-depth", o->max_depth, "maximum path length")->capture_default_str()->check(CLI::Range(1, 1024));
   cmd->add_option("--json", o->json, "also write the timings (build, render, wall time) to this JSON file");
-  cmd->add_flag("--quiet", o->quiet, "no progress line");
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
 
   return [o]() {
     std::unique_ptr<tbb::global_control> limit;
     if (o->threads > 0)
       limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
-    auto accel = make_accelerator(o->accel);  // check the spec before loading a large scene
+    // Check every argument before loading a possibly large scene.
+    const auto accels = expand_accelerator_list(o->accel);
+    if (accels.size() != 1)
+      throw std::invalid_argument(fmt::format(
+          "render uses one accelerator, '{}' names {} ({}); lists and 'all' are for verify, stress and bench",
+          o->accel, accels.size(), fmt::join(accels, " ")));
+    auto accel = make_accelerator(accels.front());
+    const std::string scene_arg = pick_scene("render", o->scene, o->positional_scene, "cornell");
+    std::string out = o->out.empty() ? default_output_name(scene_arg) : o->out;
+    {
+      const std::string ext = lower_extension_of(out);
+      if (ext != ".png" && ext != ".pfm" && ext != ".exr")
+        throw std::invalid_argument(fmt::format("--out {}: use a .png, .exr or .pfm file name", out));
+    }
+    std::pair<int, int> size{0, 0};
+    if (!o->size.empty()) size = parse_size(o->size);
+    const Vec3f background = o->background.empty() ? Vec3f::Zero() : parse_background(o->background);
+    if (!o->camera.empty()) {
+      View probe;
+      apply_camera_option(o->camera, probe);  // syntax errors before the load
+    }
+
     Timer load;
-    const Scene scene = load_scene(o->positional_scene.empty() ? o->scene : o->positional_scene);
+    Scene scene = load_scene(scene_arg);
     const double load_ms = load.ms();
+    if (!o->up.empty()) apply_up_axis(o->up, scene);
+    if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
+    if (!o->up.empty() || !o->camera.empty()) aim_key_light(scene);  // keep the light where it was, relative to the camera
+    if (!o->background.empty()) scene.background = background;
     RenderSettings rs;
     rs.width = scene.view.width;
     rs.height = scene.view.height;
-    if (!o->size.empty()) std::tie(rs.width, rs.height) = parse_size(o->size);
+    if (!o->size.empty()) std::tie(rs.width, rs.height) = size;
     rs.spp = o->spp;
     rs.seed = o->seed;
     rs.max_depth = o->max_depth;
-    rs.progress = !o->quiet && isatty(fileno(stderr));
-    std::string out = o->out;
-    if (out.empty()) {
-      std::string stem = scene.name;
-      for (char& c : stem)
-        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-      out = "out/" + stem + ".png";
-    }
-    {
-      const std::string ext = out.size() >= 4 ? out.substr(out.size() - 4) : "";
-      if (ext != ".png" && ext != ".pfm") throw std::invalid_argument(fmt::format("--out {}: use a .png or .pfm file name", out));
-    }
+    rs.progress = !o->quiet && stderr_is_terminal();
     Timer wall;
     const BuildStats bs = accel->build(scene.mesh);
     const RenderResult r = render(scene, *accel, rs);
     const double wall_s = wall.seconds();
     write_image(r.image, out);
     const double mrays = (r.rays + r.shadow_rays) / std::max(r.seconds, 1e-9) * 1e-6;
-    std::printf("%s: %zu triangles (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
-                scene.name.c_str(), scene.num_triangles(), load_ms, accel->spec().c_str(), bs.build_ms, rs.width,
-                rs.height, rs.spp, r.seconds, mrays, out.c_str());
+    std::printf("%s: %zu triangle%s (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
+                scene.name.c_str(), scene.num_triangles(), scene.num_triangles() == 1 ? "" : "s", load_ms,
+                accel->spec().c_str(), bs.build_ms, rs.width, rs.height, rs.spp, r.seconds, mrays, out.c_str());
     if (!o->json.empty()) {
       const nlohmann::json rec = {{"scene", scene.name},
                                   {"triangles", scene.num_triangles()},

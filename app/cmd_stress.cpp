@@ -7,6 +7,7 @@
 #include "accel/registry.h"
 #include "app/check_json.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "bench/report.h"
 #include "bench/stress.h"
 
@@ -36,19 +37,21 @@ nlohmann::json stress_record_json(const StressRecord& r) {
 
 Runner add_stress(CLI::App& app) {
   struct Opts {
-    std::string accel = "all", scenario = "all", json;
+    std::string accel = "all", scenario, positional_scenario, json;
     double ray_scale = 1.0, budget = 2.0;
     uint64_t seed = 1;
     int threads = 0;
-    bool list = false;
+    bool list = false, quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
       "stress", "run named failure scenarios (precision, degenerate scenes, watertightness, ray corner cases) "
                 "against every accelerator, Embree (robust) as the reference, the exact oracle as the judge");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
-  cmd->add_option("--scenario", o->scenario, "scenario names or prefixes, comma separated, or 'all' (see --list)")
-      ->capture_default_str();
+  // Stress runs named scenarios rather than scenes: they take the positional place a scene has elsewhere.
+  cmd->add_option("scenario", o->positional_scenario,
+                  "scenario names or prefixes, comma separated, or 'all' (the default; see --list)");
+  cmd->add_option("--scenario", o->scenario, "the scenarios, as the positional argument");
   cmd->add_option("--ray-scale", o->ray_scale, "multiply every scenario's ray count")
       ->capture_default_str()
       ->check(CLI::Range(1e-4, 100.0));
@@ -56,9 +59,10 @@ Runner add_stress(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.01, 3600.0));
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "threads (0 = all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--json", o->json, "write records to this JSON file");
+  add_threads_option(cmd, o->threads);
+  cmd->add_option("-o,--json", o->json, "write records to this JSON file (also when interrupted: complete false)");
   cmd->add_flag("--list", o->list, "list the scenarios and exit");
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
 
   return [o]() {
     if (o->list) {
@@ -67,19 +71,35 @@ Runner add_stress(CLI::App& app) {
     }
     const auto specs = expand_accelerator_list(o->accel);
     StressOptions so;
-    so.scenarios = expand_stress_scenarios(o->scenario);
+    if (!o->scenario.empty() && !o->positional_scenario.empty())
+      throw std::invalid_argument(fmt::format("stress takes its scenarios either positionally or with --scenario, not "
+                                              "both (got '{}' and '{}')",
+                                              o->positional_scenario, o->scenario));
+    so.scenarios = expand_stress_scenarios(!o->positional_scenario.empty() ? o->positional_scenario
+                                           : !o->scenario.empty()         ? o->scenario
+                                                                          : std::string("all"));
     so.ray_scale = o->ray_scale;
     so.time_budget_s = o->budget;
     so.seed = o->seed;
     so.threads = o->threads;
-    std::printf("stress: %zu scenarios x %zu accelerators, reference %s, judge: exact oracle\n", so.scenarios.size(),
-                specs.size(), so.reference.c_str());
+    InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
+    std::printf("stress: %zu scenario%s x %zu accelerator%s, reference %s, judge: exact oracle\n",
+                so.scenarios.size(), so.scenarios.size() == 1 ? "" : "s", specs.size(), specs.size() == 1 ? "" : "s",
+                so.reference.c_str());
     std::printf("%-18s %-26s %-11s %9s %8s %10s %8s %8s %8s %8s %7s %6s %6s %6s %7s %9s\n", "scenario", "accel", "status",
                 "tris", "rays", "build ms", "MiB", "Mrays/s", "embree", "ratio", "disagr", "ties", "rl_wr", "em_wr",
                 "leaks", "leaks/M");
     std::fflush(stdout);
     bool failed = false;
+    ProgressLine progress("stress", !o->quiet && stderr_is_terminal());
+    so.stop = interrupt.flag();
+    size_t finished = 0;
+    so.on_start = [&](const std::string& scenario, const std::string& accel, size_t i, size_t n) {
+      progress.update(i, n, fmt::format("scenario {} ({}), {} records done", scenario, accel, finished));
+    };
     const auto records = run_stress(specs, so, [&](const StressRecord& r) {
+      ++finished;
+      progress.clear();
       std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.3g %8.3g %8.3g %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
                   r.scenario.c_str(), r.accel.c_str(), r.status.c_str(), r.triangles, r.rays, r.build_ms,
                   r.bytes / 1048576.0, r.mrays_per_s, r.embree_mrays_per_s, r.ratio,
@@ -96,7 +116,18 @@ Runner add_stress(CLI::App& app) {
       }
       recs.push_back(stress_record_json(r));
     }
-    if (!o->json.empty()) write_json_report(o->json, report_header("stress"), recs);
+    progress.clear();
+    const bool interrupted = interrupt.interrupted();
+    if (!o->json.empty()) {
+      nlohmann::json header = report_header("stress");
+      header["complete"] = !interrupted;
+      write_json_report(o->json, header, recs);
+    }
+    if (interrupted) {
+      std::fprintf(stderr, "raylab stress: interrupted: %zu finished records kept%s%s\n", records.size(),
+                   o->json.empty() ? "" : " in ", o->json.c_str());
+      return kExitInterrupted;
+    }
     std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
                 records.size(), n_failed);
     return failed ? kExitCheckFailed : 0;

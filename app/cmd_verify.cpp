@@ -1,11 +1,14 @@
+#include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <set>
 
 #include <fmt/format.h>
 
 #include "accel/registry.h"
 #include "app/check_json.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "bench/report.h"
 #include "bench/verify.h"
 #include "scenes/scene_registry.h"
@@ -19,22 +22,34 @@ nlohmann::json verify_record_json(const VerifyRecord& r) {
   return j;
 }
 
+// Ray sets built from primary hits (diffuse, shadow) hold one ray per hit,
+// so fewer than asked when rays miss: say so instead of silently tracing less.
+std::string ray_set_size_note(const std::string& set, size_t asked, size_t got) {
+  if (got == asked) return {};
+  const bool secondary = set == "diffuse" || set == "shadow";
+  return fmt::format("note: ray set '{}' holds {} rays, not {}{}\n", set, got, asked,
+                     secondary ? " (its rays start from primary hits; primary rays that miss give none)" : "");
+}
+
 Runner add_verify(CLI::App& app) {
   struct Opts {
-    std::string scene = "cornell", accel = "bvh,brute", ray_sets = "primary,random", json;
+    std::string scene, positional_scene, accel = "bvh,brute", ray_sets = "primary,random", json;
     size_t rays = 65536;
     uint64_t seed = 1;
     int threads = 0;
+    bool quiet = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("verify", "compare accelerators' hits with Embree (robust) on the same rays");
-  cmd->add_option("--scene", o->scene, "procedural scene spec or mesh file")->capture_default_str();
+  cmd->add_option("scene", o->positional_scene, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
+  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
-  cmd->add_option("--rays", o->rays, "rays per ray set")->capture_default_str()->check(CLI::Range(size_t{1}, size_t{1} << 28));
-  cmd->add_option("--ray-sets", o->ray_sets, "primary, random, diffuse, shadow")->capture_default_str();
+  add_ray_count_option(cmd, o->rays, "rays per ray set");
+  cmd->add_option("--ray-sets", o->ray_sets, "ray sets, comma separated: primary, random, diffuse, shadow")->capture_default_str();
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "threads (0 = all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--json", o->json, "write records to this JSON file");
+  add_threads_option(cmd, o->threads);
+  cmd->add_option("-o,--json", o->json, "write records to this JSON file (also when interrupted: complete false)");
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
 
   return [o]() {
     const auto specs = expand_accelerator_list(o->accel);
@@ -43,12 +58,25 @@ Runner add_verify(CLI::App& app) {
     vo.seed = o->seed;
     vo.threads = o->threads;
     vo.ray_sets = parse_name_list(o->ray_sets);
-    const Scene scene = load_scene(o->scene);
-    const auto records = verify_accelerators(scene, specs, vo);
-    std::printf("verify %s (%zu triangles) against %s\n", scene.name.c_str(), scene.num_triangles(), vo.reference.c_str());
+    for (const auto& name : vo.ray_sets)  // before loading a possibly large scene
+      if (std::find(ray_set_names().begin(), ray_set_names().end(), name) == ray_set_names().end())
+        throw std::invalid_argument(fmt::format("unknown ray set '{}' (ray sets: primary, random, diffuse, shadow)", name));
+    const Scene scene = load_scene(pick_scene("verify", o->scene, o->positional_scene, "cornell"));
+    InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
+    std::printf("verify %s (%zu triangle%s) against %s\n", scene.name.c_str(), scene.num_triangles(),
+                scene.num_triangles() == 1 ? "" : "s", vo.reference.c_str());
     std::printf("%-28s %-8s %8s %9s %9s %6s %12s %12s %9s %11s  %s\n", "accel", "rays", "count", "hit/miss", "prim", "ties",
                 "raylab_wrong", "embree_wrong", "occl", "max rel t", "result");
+    std::fflush(stdout);
+
+    ProgressLine progress("verify", !o->quiet && stderr_is_terminal());
+    vo.stop = interrupt.flag();
+    vo.on_start = [&](size_t i, size_t n, const std::string& what) { progress.update(i, n, what); };
+    const auto records = verify_accelerators(scene, specs, vo);
+    progress.clear();
+
     bool failed = false;
+    std::set<std::string> noted;
     nlohmann::json recs = nlohmann::json::array();
     for (const auto& r : records) {
       std::printf("%-28s %-8s %8zu %9zu %9zu %6zu %12zu %12zu %9zu %11.3g  %s\n", r.accel.c_str(), r.ray_set.c_str(),
@@ -56,8 +84,19 @@ Runner add_verify(CLI::App& app) {
                   r.occlusion_disagree, r.max_rel_t_err, r.failed() ? "FAIL" : "ok");
       failed |= r.failed();
       recs.push_back(verify_record_json(r));
+      if (noted.insert(r.ray_set).second) std::fputs(ray_set_size_note(r.ray_set, o->rays, r.rays).c_str(), stderr);
     }
-    if (!o->json.empty()) write_json_report(o->json, report_header("verify"), recs);
+    const bool interrupted = interrupt.interrupted();
+    if (!o->json.empty()) {
+      nlohmann::json header = report_header("verify");
+      header["complete"] = !interrupted;
+      write_json_report(o->json, header, recs);
+    }
+    if (interrupted) {
+      std::fprintf(stderr, "raylab verify: interrupted: %zu finished records kept%s%s\n", records.size(),
+                   o->json.empty() ? "" : " in ", o->json.c_str());
+      return kExitInterrupted;
+    }
     return failed ? kExitCheckFailed : 0;
   };
 }

@@ -9,10 +9,12 @@
 
 namespace raylab::cli {
 
-// Exit codes: 0 success, 1 a check failed (verify disagreements), 2 bad
-// input (arguments, scenes, files) or any other error.
+// Exit codes: 0 success, 1 a check failed (verify disagreements, compare
+// regressions), 2 bad input (arguments, scenes, files) or any other error,
+// 130 interrupted by Ctrl-C (as a shell reports SIGINT).
 inline constexpr int kExitCheckFailed = 1;
 inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitInterrupted = 130;  // Ctrl-C: finished records kept, "complete": false
 
 using Runner = std::function<int()>;
 
@@ -24,6 +26,7 @@ Runner add_rays(CLI::App& app);
 Runner add_info(CLI::App& app);
 Runner add_scenes(CLI::App& app);
 Runner add_accels(CLI::App& app);
+Runner add_compare(CLI::App& app);
 
 // "512x384" -> (512, 384); throws CLI::ValidationError style std::invalid_argument.
 std::pair<int, int> parse_size(const std::string& text);
@@ -31,5 +34,35 @@ std::pair<int, int> parse_size(const std::string& text);
 // Comma-separated list of positive integers ("1,2").
 std::vector<int> parse_int_list(const std::string& text, const char* what);
 std::vector<std::string> parse_name_list(const std::string& text);
+
+// --- One vocabulary for every subcommand (README: "Command line") ---
+// --ray-sets NAMES  which ray sets;  --rays N  how many rays per set;
+// a positional scene or --scene;  -t/--threads (0 = all cores);  -o the
+// command's output file.
+
+// The scene given positionally or with --scene (both at once is an error
+// naming the two); `fallback` when neither.
+std::string pick_scene(const std::string& command, const std::string& option, const std::string& positional,
+                       const std::string& fallback);
+
+// Adds "-t,--threads" taking one count; 0 (the default) = all cores.
+CLI::Option* add_threads_option(CLI::App* cmd, int& threads);
+
+// Adds "--rays" taking one ray count; a set name given by habit gets a
+// message pointing to --ray-sets instead of CLI11's range error.
+CLI::Option* add_ray_count_option(CLI::App* cmd, size_t& rays, const std::string& help,
+                                  const std::string& names = "--rays");
+
+// "1,0,4" -> thread counts with 0 replaced by all cores (de-duplicated, in order).
+std::vector<int> parse_thread_list(const std::string& text);
+
+// Lower-case extension of a file name with the dot (".png"), "" when none.
+std::string lower_extension_of(const std::string& path);
+
+// True when stderr is a terminal (progress lines are drawn only then).
+bool stderr_is_terminal();
+
+// "12.3 s", "4 min 05 s", "1 h 02 min": for progress estimates.
+std::string format_duration(double seconds);
 
 }  // namespace raylab::cli

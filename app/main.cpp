@@ -2,9 +2,11 @@
 #include <cstdio>
 #include <exception>
 #include <map>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "accel/spec.h"
 #include "app/commands.h"
 
 int main(int argc, char** argv) {
@@ -25,6 +27,7 @@ int main(int argc, char** argv) {
   add(add_info, "info");
   add(add_scenes, "scenes");
   add(add_accels, "accels");
+  add(add_compare, "compare");
 
   std::string names;
   bool known = false;
@@ -36,6 +39,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "raylab: error: unknown command '%s' (commands: %s)\n", argv[1], names.c_str());
     return kExitBadInput;
   }
+  // Errors name the subcommand and point to its own help, where the options are.
+  const std::string command = known ? std::string(argv[1]) : std::string();
+  const std::string prefix = command.empty() ? "raylab" : "raylab " + command;
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -45,15 +51,21 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "raylab: error: %s (see raylab --help)\n", e.what());
+    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", prefix.c_str(), e.what(), prefix.c_str());
     return kExitBadInput;
   }
 
   try {
     for (auto& [sub, run] : runners)
       if (sub->parsed()) return run();
+  } catch (const std::invalid_argument& e) {  // an option's value: its help says what is accepted
+    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", prefix.c_str(), e.what(), prefix.c_str());
+    return kExitBadInput;
+  } catch (const raylab::SpecError& e) {
+    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", prefix.c_str(), e.what(), prefix.c_str());
+    return kExitBadInput;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "raylab: error: %s\n", e.what());
+    std::fprintf(stderr, "%s: error: %s\n", prefix.c_str(), e.what());
     return kExitBadInput;
   }
   return kExitBadInput;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <new>
 
 #include <fmt/format.h>
@@ -38,12 +39,15 @@ nlohmann::json BenchRecord::to_json() const {
   j["best_embree_mrays_per_s"] = best_embree_mrays_per_s;
   j["ratio_to_best_embree"] = ratio_to_best_embree;
   j["embree_agreement"] = embree_agreement;
-  j["nodes_per_ray"] = nodes_per_ray;
-  j["tris_per_ray"] = tris_per_ray;
-  j["sah_cost"] = std::isfinite(sah_cost) ? nlohmann::json(sah_cost) : nlohmann::json(nullptr);
-  j["nodes"] = nodes;
-  j["leaves"] = leaves;
-  j["max_depth"] = max_depth;
+  // null where a figure does not apply (docs/json-reports.md).
+  auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["nodes_per_ray"] = number_or_null(nodes_per_ray);
+  j["tris_per_ray"] = number_or_null(tris_per_ray);
+  j["sah_cost"] = number_or_null(sah_cost);
+  j["nodes"] = has_tree ? nlohmann::json(nodes) : nlohmann::json(nullptr);
+  j["leaves"] = has_tree ? nlohmann::json(leaves) : nlohmann::json(nullptr);
+  j["max_depth"] = has_tree ? nlohmann::json(max_depth) : nlohmann::json(nullptr);
+  j["trace_s"] = trace_s;
   j["extra"] = extra;
   j["rss_before_build_bytes"] = rss_before_build_bytes;
   j["rss_peak_bytes"] = rss_peak_bytes;
@@ -267,7 +271,9 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.embree_mrays_per_s = et.mrays_per_s(r.rays);
         r.ratio_to_embree = r.embree_mrays_per_s > 0 ? r.mrays_per_s / r.embree_mrays_per_s : 0;
         r.embree_agreement = agree;
-        if (ts.rays) {
+        r.nodes_per_ray = r.tris_per_ray = std::numeric_limits<double>::quiet_NaN();
+        // A structure without counters (Embree) leaves them at zero: n/a, not 0.
+        if (ts.rays && (ts.nodes_visited > 0 || ts.triangle_tests > 0)) {
           r.nodes_per_ray = static_cast<double>(ts.nodes_visited) / ts.rays;
           r.tris_per_ray = static_cast<double>(ts.triangle_tests) / ts.rays;
         }
@@ -275,6 +281,8 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         r.nodes = b.stats.nodes;
         r.leaves = b.stats.leaves;
         r.max_depth = b.stats.max_depth;
+        r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
+        r.trace_s = t.repeat_s;
         r.extra = b.stats.extra;
         if (!embree_timed_first.empty()) r.extra["embree_timed_first"] = 1;
         r.rss_before_build_bytes = rss_before_build;
@@ -342,13 +350,22 @@ std::string format_bench_table(const std::vector<BenchRecord>& records) {
   std::string s = fmt::format("{:<34} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7}  {}\n", "accel",
                               "rays", "thr", "build ms", "bytes", "prep ms", "Mrays/s", "embree", "ratio", "/best",
                               "agree %", "nodes/r", "tris/r", "best embree");
+  auto per_ray = [](double v) { return std::isfinite(v) ? fmt::format("{:.1f}", v) : std::string("n/a"); };
   for (const auto& r : records) {
-    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7.1f} {:>7.1f}  {}\n",
+    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7} {:>7}  {}\n",
                      r.accel.size() > 34 ? r.accel.substr(0, 34) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
                      r.prepare_ms, r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, r.ratio_to_best_embree,
-                     100.0 * r.embree_agreement, r.nodes_per_ray, r.tris_per_ray, r.best_embree);
+                     100.0 * r.embree_agreement, per_ray(r.nodes_per_ray), per_ray(r.tris_per_ray), r.best_embree);
   }
   return s;
+}
+
+std::string depth_cap_warning(const BuildStats& stats) {
+  const auto it = stats.extra.find("max_depth_limit");
+  if (it == stats.extra.end() || stats.max_depth < static_cast<int>(it->second)) return {};
+  return fmt::format("the tree reached its depth cap ({} levels): deeper splits were refused and leaves may be larger "
+                     "than the cost model wanted (raise max_depth, up to 64)",
+                     static_cast<int>(it->second));
 }
 
 std::string format_build_summary(const std::vector<BenchRecord>& records) {
@@ -357,11 +374,18 @@ std::string format_build_summary(const std::vector<BenchRecord>& records) {
   for (const auto& r : records) {
     if (r.accel == last) continue;
     last = r.accel;
-    s += fmt::format("build {}: {:.2f} ms, {:.1f} bytes/tri, sah {:.3f}, nodes {}, leaves {}, depth {}", r.accel,
-                     r.build_ms, r.triangles ? static_cast<double>(r.bytes) / r.triangles : 0.0, r.sah_cost, r.nodes,
-                     r.leaves, r.max_depth);
+    const std::string sah = std::isfinite(r.sah_cost) ? fmt::format("{:.3f}", r.sah_cost) : std::string("n/a");
+    s += fmt::format("build {}: {:.2f} ms, {:.1f} bytes/tri, sah {}", r.accel, r.build_ms,
+                     r.triangles ? static_cast<double>(r.bytes) / r.triangles : 0.0, sah);
+    s += r.has_tree ? fmt::format(", nodes {}, leaves {}, depth {}", r.nodes, r.leaves, r.max_depth)
+                    : std::string(", nodes n/a, leaves n/a, depth n/a (not reported by the structure)");
     for (const auto& [k, v] : r.extra) s += fmt::format(", {} {:.4g}", k, v);
     s += "\n";
+    BuildStats st;
+    st.max_depth = r.max_depth;
+    st.extra = r.extra;
+    const std::string warning = depth_cap_warning(st);
+    if (!warning.empty()) s += fmt::format("warning: {}: {}\n", r.accel, warning);
   }
   return s;
 }

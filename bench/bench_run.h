@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "accel/accelerator.h"
 #include "bench/ray_sets.h"
 #include "scenes/scene.h"
 
@@ -68,10 +69,12 @@ struct BenchRecord {
   std::string best_embree;
   double best_embree_mrays_per_s = 0, ratio_to_best_embree = 0;
   double embree_agreement = 1.0;  // fraction of rays answered like Embree (ties count as agreement)
-  double nodes_per_ray = 0, tris_per_ray = 0;
-  double sah_cost = 0;
-  size_t nodes = 0, leaves = 0;
+  double nodes_per_ray = 0, tris_per_ray = 0;  // NaN: not counted (Embree has no traversal counters)
+  double sah_cost = 0;                          // NaN: not reported by the structure
+  size_t nodes = 0, leaves = 0;                 // 0 with has_tree false: not reported (Embree)
   int max_depth = 0;
+  bool has_tree = true;
+  std::vector<double> trace_s;  // seconds of each timed repeat, in run order (raylab compare's test)
   std::map<std::string, double> extra;  // BuildStats::extra (structure-specific figures)
   // Resident set of the process (from the OS) just before this structure's
   // build, and its peak from then until this record (build, ray sets and
@@ -100,6 +103,10 @@ std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& a
 
 // CSV with one row per record (the flat fields of to_json, extra omitted).
 std::string bench_csv(const std::vector<BenchRecord>& records);
+
+// Non-empty when a depth-capped build (k-d tree: extra "max_depth_limit")
+// reached its cap: leaves may then hold more triangles than the cost model wanted.
+std::string depth_cap_warning(const BuildStats& stats);
 
 // Fixed-width table for the terminal.
 std::string format_bench_table(const std::vector<BenchRecord>& records);

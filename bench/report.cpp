@@ -47,6 +47,7 @@ nlohmann::json report_header(const std::string& command) {
   char date[64];
   std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
   nlohmann::json h;
+  h["schema_version"] = kReportSchemaVersion;
   h["command"] = command;
   h["date"] = date;
   h["cpu"] = cpu_model();

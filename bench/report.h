@@ -7,6 +7,12 @@
 
 namespace raylab {
 
+// Version of the JSON reports' layout (docs/json-reports.md). Raised when a
+// field changes meaning or type: 2 added trace_s to bench records and null
+// for figures that do not apply (Embree's tree shape and traversal counters).
+inline constexpr int kReportSchemaVersion = 2;
+
+// {"schema_version", "command", "date", "cpu", ...}.
 nlohmann::json report_header(const std::string& command);
 
 std::string cpu_model();

@@ -112,7 +112,10 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
   std::vector<StressRecord> records;
   tbb::task_arena arena(threads);
 
-  for (const auto& name : names) {
+  auto stopped = [&] { return opt.stop && opt.stop->load(); };
+  for (size_t scenario_index = 0; scenario_index < names.size() && !stopped(); ++scenario_index) {
+    const std::string& name = names[scenario_index];
+    if (opt.on_start) opt.on_start(name, "generating", scenario_index, names.size());
     const StressScenario sc = make_stress_scenario(name, opt.ray_scale, opt.seed);
     const std::vector<Ray>& rays = sc.rays;
     const size_t n = rays.size();
@@ -133,6 +136,8 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
     }
 
     for (const auto& spec_text : stress_specs_for(sc, accel_specs, opt)) {
+      if (stopped()) break;
+      if (opt.on_start) opt.on_start(name, spec_text, scenario_index, names.size());
       StressRecord rec;
       rec.scenario = name;
       rec.accel = spec_text;

@@ -8,6 +8,7 @@
 // separately. The watertight scenarios also count leaks: rays that exactly
 // cross a closed surface but miss it (or reach its far side), and rays from
 // strictly inside that escape.
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -87,6 +88,12 @@ struct StressOptions {
   double tie_tolerance = 1e-4;
   std::string reference = "embree:robust=1";
   bool add_variants = true;             // watertight scenarios: also tri=mt variants and embree robust
+  // Interruption and progress (raylab stress): stop is polled before each
+  // scenario x accelerator; on_start sees it before it runs.
+  const std::atomic<bool>* stop = nullptr;
+  std::function<void(const std::string& scenario, const std::string& accel, size_t scenario_index,
+                     size_t scenarios)>
+      on_start;
 };
 
 // The accelerator specs a scenario runs: the given ones, plus for watertight

@@ -57,6 +57,7 @@ void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOu
 TraceTiming summarize_times(std::vector<double> times) {
   TraceTiming timing;
   if (times.empty()) return timing;
+  timing.repeat_s = times;  // in run order, for significance tests between runs (raylab compare)
   std::sort(times.begin(), times.end());
   timing.min_s = times.front();
   timing.max_s = times.back();

@@ -37,6 +37,7 @@ void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOu
 
 struct TraceTiming {
   double median_s = 0, min_s = 0, max_s = 0;
+  std::vector<double> repeat_s;  // every timed repeat, in run order
   double prepare_s = 0;  // preparation (untimed in median/min/max); 0 when `prepared` was given
   double mrays_per_s(size_t rays) const { return median_s > 0 ? rays / median_s * 1e-6 : 0.0; }
 };

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
@@ -104,11 +105,17 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
   for (size_t s = 0; s < sets.size(); ++s) trace_set(*reference, sets[s], threads, ref_out[s]);
 
   std::vector<VerifyRecord> records;
+  auto stopped = [&] { return opt.stop && opt.stop->load(); };
+  const size_t total = accel_specs.size() * sets.size();
   for (const auto& spec : accel_specs) {
+    if (stopped()) break;
+    if (opt.on_start) opt.on_start(records.size(), total, fmt::format("building {}", spec));
     auto accel = make_accelerator(spec);
     const BuildStats bs = accel->build(scene.mesh);
-    for (size_t s = 0; s < sets.size(); ++s) {
+    for (size_t s = 0; s < sets.size() && !stopped(); ++s) {
       const RaySet& set = sets[s];
+      if (opt.on_start)
+        opt.on_start(records.size(), total, fmt::format("{} on {} {} rays", accel->spec(), set.rays.size(), set.name));
       VerifyRecord rec;
       rec.scene = scene.name;
       rec.accel = accel->spec();

@@ -2,6 +2,8 @@
 // `raylab verify`: trace the same rays with Embree (robust mode) and each
 // accelerator and count disagreements; every disagreement is referred to the
 // double-precision oracle, which decides who was wrong.
+#include <atomic>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,10 @@ struct VerifyOptions {
   int threads = 0;      // 0 = all cores
   double tie_tolerance = 1e-4;  // relative distance under which two hits are a tie
   std::string reference = "embree:robust=1";
+  // Interruption and progress (raylab verify): stop is polled between
+  // records; on_start sees "accel on set" before each, with its index and the total.
+  const std::atomic<bool>* stop = nullptr;
+  std::function<void(size_t index, size_t total, const std::string& what)> on_start;
 };
 
 std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vector<std::string>& accel_specs,

@@ -50,6 +50,9 @@ namespace fs = std::filesystem;
 struct ImportHeader {
   uint64_t magic = 0x52594C4142494D50ull;  // "RYLABIMP"
   uint64_t error_bytes = 0, vertices = 0, triangles = 0, materials = 0;
+  // The file's first camera (glTF, Collada, ...): has_camera, from, at, up,
+  // vertical field of view in degrees.
+  float has_camera = 0, camera_from[3] = {}, camera_at[3] = {}, camera_up[3] = {}, camera_fov_deg = 0;
 
   uint64_t payload_bytes() const {
     return vertices * sizeof(Vec3f) + triangles * (sizeof(std::array<uint32_t, 3>) + sizeof(uint32_t)) +
@@ -81,6 +84,34 @@ std::string explain_assimp_error(std::string why) {
     return "invalid face index (0, or not a number; OBJ indices start at 1)";
   if (why.rfind("Validation failed: ", 0) == 0) why = "inconsistent data (" + why.substr(19) + ")";
   return why;
+}
+
+// The line of the first whitespace-delimited occurrence of `token` in a text
+// file (0 if absent), so a "malformed number" names where to look: Assimp's
+// text readers report the token but not its line.
+uint64_t line_of_token(const std::string& path, const std::string& token) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  for (uint64_t n = 1; std::getline(in, line) && n < (uint64_t{1} << 32); ++n) {
+    for (size_t at = line.find(token); at != std::string::npos; at = line.find(token, at + 1)) {
+      const bool starts = at == 0 || std::isspace(static_cast<unsigned char>(line[at - 1]));
+      const size_t end = at + token.size();
+      const bool ends = end == line.size() || std::isspace(static_cast<unsigned char>(line[end]));
+      if (starts && ends) return n;
+    }
+  }
+  return 0;
+}
+
+std::string explain_assimp_error_in(const std::string& path, const std::string& why) {
+  std::string text = explain_assimp_error(why);
+  static const std::regex number(R"(^malformed number '([^']+)'$)");
+  std::smatch m;
+  if (std::regex_match(text, m, number)) {
+    const uint64_t line = line_of_token(path, m[1].str());
+    if (line > 0) text += fmt::format(" at line {}", line);
+  }
+  return text;
 }
 
 struct Instance {
@@ -119,6 +150,42 @@ Material material_from(const aiMaterial* am) {
   return m;
 }
 
+// The first camera of the file, placed by its node's world transform.
+// Assimp documents mHorizontalFOV as half the horizontal angle and the camera
+// fields as relative to its node. Its 5.2 glTF 2 importer departs from both:
+// it copies the node's translation into mPosition (so it would count twice)
+// and stores yfov x aspect as mHorizontalFOV. raylab's views take the full
+// vertical angle.
+void store_first_camera(const aiScene* ai, ImportHeader& h, bool gltf) {
+  if (ai->mNumCameras == 0 || !ai->mCameras[0]) return;
+  const aiCamera* cam = ai->mCameras[0];
+  aiMatrix4x4 xf;
+  for (const aiNode* node = ai->mRootNode->FindNode(cam->mName); node; node = node->mParent)
+    xf = node->mTransformation * xf;
+  aiMatrix3x3 rot(xf);
+  const aiVector3D from = xf * (gltf ? aiVector3D(0, 0, 0) : cam->mPosition);
+  const aiVector3D dir = rot * cam->mLookAt;
+  const aiVector3D up = rot * cam->mUp;
+  const float aspect = cam->mAspect > 0 ? cam->mAspect : 1.0f;
+  const float hfov = cam->mHorizontalFOV > 0 ? cam->mHorizontalFOV : 0.785398f;
+  const float vfov_rad = gltf ? hfov / aspect : 2.0f * std::atan(std::tan(hfov) / aspect);
+  const float vfov = vfov_rad * 180.0f / 3.14159265f;
+  const float values[] = {from.x, from.y, from.z, from.x + dir.x, from.y + dir.y, from.z + dir.z, up.x, up.y, up.z, vfov};
+  for (float v : values)
+    if (!std::isfinite(v)) return;
+  View v;
+  v.from = Vec3f(from.x, from.y, from.z);
+  v.at = Vec3f(values[3], values[4], values[5]);
+  v.up = Vec3f(up.x, up.y, up.z);
+  v.fov_deg = vfov;
+  if (!view_problem(v).empty()) return;  // a degenerate camera: keep the default framing
+  h.has_camera = 1;
+  std::copy(values, values + 3, h.camera_from);
+  std::copy(values + 3, values + 6, h.camera_at);
+  std::copy(values + 6, values + 9, h.camera_up);
+  h.camera_fov_deg = vfov;
+}
+
 // Reads `path` with Assimp and writes the merged mesh into the memory file.
 // Runs in the child. Throws SceneLoadError.
 void import_into_memfd(const std::string& path, int fd) {
@@ -126,7 +193,9 @@ void import_into_memfd(const std::string& path, int fd) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* ai =
       importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType);
-  if (!ai) throw SceneLoadError(fmt::format("{}: cannot load mesh: {}", path, explain_assimp_error(importer.GetErrorString())));
+  if (!ai)
+    throw SceneLoadError(
+        fmt::format("{}: cannot load mesh: {}", path, explain_assimp_error_in(path, importer.GetErrorString())));
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE || !ai->mRootNode)
     throw SceneLoadError(fmt::format("{}: file is incomplete (no mesh data)", path));
 
@@ -149,6 +218,11 @@ void import_into_memfd(const std::string& path, int fd) {
   const uint32_t default_id = static_cast<uint32_t>(h.materials);
   if (default_material) ++h.materials;
 
+  {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    store_first_camera(ai, h, ext == ".gltf" || ext == ".glb");
+  }
   const uint64_t bytes = sizeof h + h.payload_bytes();
   if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0)
     throw SceneLoadError(fmt::format("{}: cannot size the import buffer ({} bytes): {}", path, bytes, std::strerror(errno)));
@@ -254,7 +328,8 @@ double import_timeout_seconds(const std::string& path) {
 // Runs the import in a child; `meanwhile` runs in this process at the same
 // time (the prechecks: on two cores they cost no wall time), and if it
 // throws, the child is killed and its exception wins.
-void import_isolated(const std::string& path, Scene& s, const std::function<void()>& meanwhile) {
+void import_isolated(const std::string& path, Scene& s, const std::function<void()>& meanwhile,
+                     std::optional<View>& file_camera) {
   const int fd = ::memfd_create("raylab-import", MFD_CLOEXEC);
   if (fd < 0) throw SceneLoadError(fmt::format("{}: cannot create memory file: {}", path, std::strerror(errno)));
   struct Closer {
@@ -324,6 +399,14 @@ void import_isolated(const std::string& path, Scene& s, const std::function<void
       !read_part(s.material_ids.data(), h.triangles * sizeof(uint32_t)) ||
       !read_part(s.materials.data(), h.materials * sizeof(Material)))
     throw SceneLoadError(fmt::format("{}: cannot load mesh: the importer's data is truncated", path));
+  if (h.has_camera == 1) {
+    View v;
+    v.from = Vec3f(h.camera_from[0], h.camera_from[1], h.camera_from[2]);
+    v.at = Vec3f(h.camera_at[0], h.camera_at[1], h.camera_at[2]);
+    v.up = Vec3f(h.camera_up[0], h.camera_up[1], h.camera_up[2]);
+    v.fov_deg = h.camera_fov_deg;
+    if (view_problem(v).empty()) file_camera = v;
+  }
 }
 
 Vec3f json_vec3(const nlohmann::json& j, const char* key, const std::string& file) {
@@ -389,7 +472,7 @@ Scene load_mesh_file(const std::string& path) {
 
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  std::optional<View> nff_view;
+  std::optional<View> nff_view, file_camera;
   Scene s;
   s.name = path;
   // The prechecks run while the child imports; their precise messages take
@@ -397,7 +480,7 @@ Scene load_mesh_file(const std::string& path) {
   import_isolated(path, s, [&] {
     precheck_mesh_file(path);
     if (ext == ".nff") nff_view = read_nff_view(path);
-  });
+  }, file_camera);
   if (s.mesh.num_triangles() == 0) throw SceneLoadError(fmt::format("{}: contains no triangles", path));
   if (s.materials.empty()) s.materials.push_back(Material{});
   try {
@@ -406,9 +489,19 @@ Scene load_mesh_file(const std::string& path) {
     throw SceneLoadError(fmt::format("{}: {}", path, e.what()));
   }
 
-  s.view = nff_view ? *nff_view : frame_bounds(s.bounds());
+  // The file's own camera when it has one (NFF's viewpoint, a glTF camera), else a framing of the bounds.
+  s.view = nff_view ? *nff_view : file_camera ? *file_camera : frame_bounds(s.bounds());
   apply_sibling_view_file(path, s.view);
-  s.background = s.has_emitters() ? Vec3f::Constant(0.05f) : Vec3f::Constant(1.0f);
+  if (s.has_emitters()) {
+    s.background = Vec3f::Constant(0.05f);
+  } else {
+    // A dim sky plus a key light (irradiance pi: a white Lambertian surface
+    // facing it reflects radiance 1) gives shading and shadows; a white sky
+    // alone made grey objects flat silhouettes.
+    s.background = Vec3f::Constant(0.3f);
+    s.key_light = Vec3f::Constant(3.14159265f);
+    aim_key_light(s);
+  }
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -402,6 +403,19 @@ void precheck_mesh_file(const std::string& path) {
   const uint64_t size = std::filesystem::file_size(path, ec);
   if (ec) return;
   const std::string ext = lower_extension(path);
+  // A UTF-16 byte order mark: Assimp 5.2's text readers (OBJ, DAE, AC, NFF,
+  // X, ...) read no geometry from it and report "malformed XML" or nothing.
+  // Binary STL is skipped: its 80-byte header may start with any bytes.
+  if (ext != ".stl" && size >= 2) {
+    unsigned char mark[2] = {0, 0};
+    if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+      const size_t got = std::fread(mark, 1, 2, f);
+      std::fclose(f);
+      if (got == 2 && ((mark[0] == 0xFE && mark[1] == 0xFF) || (mark[0] == 0xFF && mark[1] == 0xFE)))
+        throw SceneLoadError(fmt::format("{}: UTF-16 text, from which the importer (Assimp 5.2) reads no geometry; "
+                                         "convert it to UTF-8 (iconv -f UTF-16 -t UTF-8)", path));
+    }
+  }
   if (ext == ".ply") precheck_ply(path, size);
   else if (ext == ".off") precheck_off(path, size);
   else if (ext == ".stl") precheck_stl(path, size);

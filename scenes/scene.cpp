@@ -35,6 +35,15 @@ std::string view_problem(const View& v) {
   return "";
 }
 
+void aim_key_light(Scene& scene) {
+  const View& v = scene.view;
+  const Vec3f forward = (v.at - v.from).normalized();
+  const Vec3f right = forward.cross(v.up).normalized();
+  const Vec3f up = right.cross(forward);
+  const Vec3f dir = 0.8f * up - 0.5f * right - 0.45f * forward;
+  if (dir.allFinite() && dir.squaredNorm() > 0) scene.key_light_dir = dir.normalized();
+}
+
 View frame_bounds(const Aabb& box, int width, int height, float fov_deg) {
   View v;
   v.width = width;

@@ -37,6 +37,12 @@ struct Scene {
   // Radiance seen by rays that leave the scene: the default light of mesh
   // files without emitters (a uniform sky). Black for closed scenes.
   Vec3f background = Vec3f::Zero();
+  // A distant key light (a "sun") for mesh files without emitters, so a plain
+  // mesh shows its shape and casts shadows instead of a flat silhouette under
+  // a uniform sky: irradiance on a surface facing it (zero = none), arriving
+  // from the unit direction key_light_dir (pointing towards the light).
+  Vec3f key_light = Vec3f::Zero();
+  Vec3f key_light_dir = Vec3f::UnitY();
 
   size_t num_triangles() const { return mesh.num_triangles(); }
   Aabb bounds() const { return mesh.bounds(); }
@@ -54,6 +60,11 @@ std::string view_problem(const View& v);
 
 // A camera looking at the box from a fixed oblique direction (y up), far
 // enough that the bounding sphere fits the vertical field of view.
+// Puts the key light above, to the left of and behind the camera (the
+// photographer's key-light position), relative to scene.view; call again
+// after changing the view.
+void aim_key_light(Scene& scene);
+
 View frame_bounds(const Aabb& box, int width = 512, int height = 512, float fov_deg = 45.0f);
 
 }  // namespace raylab

@@ -8,8 +8,8 @@
 #
 #   scripts/bench-scenes.sh --list                  print the scene specs, one per line
 #   scripts/bench-scenes.sh [raylab bench options]  run `raylab bench` on each scene in turn,
-#                                                   e.g. --accel embree,bvh --rays primary,diffuse --threads 1
-# Default options: --accel embree,bvh --rays primary,diffuse,shadow,random --threads 1.
+#                                                   e.g. --accel embree,bvh --ray-sets primary,diffuse --threads 1
+# Default options: --accel embree,bvh --ray-sets primary,diffuse,shadow,random --threads 1.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -33,7 +33,7 @@ if [ "${1:-}" = "--list" ]; then
 fi
 [ -x build/raylab ] || { echo "bench-scenes: build raylab first (make build)" >&2; exit 2; }
 opts=("$@")
-[ ${#opts[@]} -gt 0 ] || opts=(--accel embree,bvh --rays primary,diffuse,shadow,random --threads 1)
+[ ${#opts[@]} -gt 0 ] || opts=(--accel embree,bvh --ray-sets primary,diffuse,shadow,random --threads 1)
 for scene in "${scenes[@]}"; do
   build/raylab bench --scene "$scene" "${opts[@]}"
 done

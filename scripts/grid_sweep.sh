@@ -33,15 +33,15 @@ DENSITIES=0.125,0.25,0.5,1,2,4,8
 for pass in $(seq 1 "$PASSES"); do
   for scene in "$SHARED/bunny.ply" "$OUT/scenes/sponza.ply" "$OUT/scenes/conference.ply"; do
     bench "sweep_$(basename "$scene" .ply)_$pass" --scene "$scene" --accel grid,hashgrid,grid2 \
-      --sweep density=$DENSITIES --rays primary,diffuse
+      --sweep density=$DENSITIES --ray-sets primary,diffuse
   done
   # Teapot in a stadium, default view (the dragon is under a pixel) and a
   # view of the dragon. The single grid tests ~1e5 triangles for each ray
   # that meets the dragon, so that run uses a smaller image.
-  bench "dragon_default_$pass" --scene "$SHARED/dragon_in_sponza.ply" --accel grid,hashgrid,grid2 --rays primary
-  bench "dragon_view_$pass" --scene "$OUT/scenes/dragon_in_sponza.ply" --accel grid,grid2 --rays primary --size 128x128
+  bench "dragon_default_$pass" --scene "$SHARED/dragon_in_sponza.ply" --accel grid,hashgrid,grid2 --ray-sets primary
+  bench "dragon_view_$pass" --scene "$OUT/scenes/dragon_in_sponza.ply" --accel grid,grid2 --ray-sets primary --size 128x128
 done
-bench memory --scene "$SHARED/dragon_in_sponza.ply" --accel grid,hashgrid --sweep density=1,8,64,512 --rays primary
+bench memory --scene "$SHARED/dragon_in_sponza.ply" --accel grid,hashgrid --sweep density=1,8,64,512 --ray-sets primary
 
 /usr/bin/python3 scripts/grid_sweep_summary.py "$OUT" > "$OUT/summary.md"
 cat "$OUT/summary.md"

@@ -8,6 +8,7 @@ packages=(
   libembree-dev      # Embree 3: the reference accelerator
   libeigen3-dev      # vector math
   libstb-dev         # stb_image_write for PNG
+  libtinyexr-dev     # OpenEXR output (small, no OpenImageIO)
   libtbb-dev         # parallel builds and tiled rendering
   libgtest-dev libgmock-dev  # googletest alone ships only sources
   libbenchmark-dev   # microbenchmarks

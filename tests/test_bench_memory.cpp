@@ -92,7 +92,7 @@ TEST(BenchMemory, StructuresThatDoNotFitAreSkippedWithTheEstimate) {
 TEST(BenchMemory, CommandLineWritesSkipsToTheJson) {
   const auto dir = test::temp_dir("bench_memory_skip");
   const auto json = dir / "s.json";
-  const auto r = test::run_raylab("bench --scene soup:n=500 --accel bvh --rays random --random-rays 100 --repeats 1 "
+  const auto r = test::run_raylab("bench --scene soup:n=500 --accel bvh --ray-sets random --rays 100 --repeats 1 "
                                   "--threads 1 --memory-headroom 0.000000000001 --json " + json.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("bvh skipped: the Embree reference needs ~"));

@@ -29,7 +29,7 @@ TEST(Cli, BadArgumentsExitWithCode2AndAMessage) {
       {"render --scene /no/such/file.ply --out X", "no such file"},
       {"verify --accel bvh,nope", "unknown accelerator 'nope'"},
       {"verify --ray-sets primary,weird", "unknown ray set 'weird'"},
-      {"bench --threads 0", "thread count"},
+      {"bench --threads -1", "thread count"},
       {"bench --sweep nothing=1,2", "no accelerator in the list has a parameter 'nothing'"},
       {"info --scene soup:n=abc", "not an integer"},
       {"nosuchcommand", "nosuchcommand"},
@@ -104,8 +104,8 @@ TEST(Cli, VerifyReportsZeroDisagreementsAndWritesJson) {
 TEST(Cli, BenchWritesRecordsWithRatiosToEmbreeFromTheSameRun) {
   const auto dir = test::temp_dir("cli_bench");
   const auto json = dir / "b.json";
-  const auto r = test::run_raylab("bench --scene soup:n=2000 --accel embree,bvh --rays primary,random,shadow,diffuse "
-                                  "--size 64x64 --random-rays 4000 --repeats 2 --threads 1,2 --quiet --json " +
+  const auto r = test::run_raylab("bench --scene soup:n=2000 --accel embree,bvh --ray-sets primary,random,shadow,diffuse "
+                                  "--size 64x64 --rays 4000 --repeats 2 --threads 1,2 --quiet --json " +
                                   json.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(json);

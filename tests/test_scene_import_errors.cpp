@@ -144,7 +144,7 @@ TEST(SceneImportErrors, CliExitsWithCode2AndOneLine) {
     const std::string path = test::write_file(dir, c.name, c.content);
     const auto r = test::run_raylab("info --scene " + path);
     EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.output;
-    EXPECT_THAT(r.output, ::testing::StartsWith("raylab: error: " + path + ": ")) << c.name;
+    EXPECT_THAT(r.output, ::testing::StartsWith("raylab info: error: " + path + ": ")) << c.name;
     EXPECT_THAT(r.output, HasSubstr(c.expect)) << c.name;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << c.name << ": " << r.output;
   }

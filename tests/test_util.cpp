@@ -7,9 +7,9 @@
 
 namespace raylab::test {
 
-CommandResult run_raylab(const std::string& args) {
+namespace {
+CommandResult run_shell(const std::string& cmd) {
   CommandResult r;
-  const std::string cmd = std::string(RAYLAB_BINARY) + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return r;
   std::array<char, 4096> buf;
@@ -18,6 +18,13 @@ CommandResult run_raylab(const std::string& args) {
   const int status = pclose(p);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+}  // namespace
+
+CommandResult run_raylab(const std::string& args) { return run_shell(std::string(RAYLAB_BINARY) + " " + args + " 2>&1"); }
+
+CommandResult run_raylab_in(const std::filesystem::path& dir, const std::string& args) {
+  return run_shell("cd '" + dir.string() + "' && " + std::string(RAYLAB_BINARY) + " " + args + " 2>&1");
 }
 
 }  // namespace raylab::test

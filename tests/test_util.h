@@ -28,6 +28,8 @@ struct CommandResult {
 
 // Runs the raylab binary with arguments (shell syntax) and captures output.
 CommandResult run_raylab(const std::string& args);
+// The same, with `dir` as the working directory.
+CommandResult run_raylab_in(const std::filesystem::path& dir, const std::string& args);
 
 // Random unit vector, uniform on the sphere.
 inline Vec3f random_direction(Pcg32& rng) {

@@ -53,7 +53,7 @@ std::vector<std::string> lines(const fs::path& p) {
 
 const std::string kSource = RAYLAB_SOURCE_DIR;
 const std::string kCommon =
-    " --scene 'soup:n=400;terrain:n=8' --rays primary,random --size 16x16 --random-rays 300 --repeats 1 --quiet";
+    " --scene 'soup:n=400;terrain:n=8' --ray-sets primary,random --size 16x16 --rays 300 --repeats 1 --quiet";
 
 TEST(Workflow, MergedCellsEqualOneRunOverTheMatrix) {
   const auto dir = test::temp_dir("workflow_merge");

@@ -398,7 +398,7 @@ TEST(BenchBestEmbree, RatiosToSingleRayAndToTheBestEmbreeMode) {
   const std::string json = (dir / "b.json").string();
   const auto r = test::run_raylab(
       "bench --scene soup:n=400 --accel \"embree;embree:api=packet16;embree:api=packet16,coherent=1;bvh\" "
-      "--rays primary,shadow --size 24x24 --threads 1 --repeats 2 --quiet --json " + json);
+      "--ray-sets primary,shadow --size 24x24 --threads 1 --repeats 2 --quiet --json " + json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(json);
   const auto j = nlohmann::json::parse(in);
@@ -434,7 +434,7 @@ TEST(BenchBestEmbree, RatiosToSingleRayAndToTheBestEmbreeMode) {
 }
 
 TEST(BenchBestEmbree, SelfCheckCommand) {
-  const auto r = test::run_raylab("bench --embree-selfcheck --scene soup:n=300 --rays primary,shadow --size 16x16 "
+  const auto r = test::run_raylab("bench --embree-selfcheck --scene soup:n=300 --ray-sets primary,shadow --size 16x16 "
                                   "--repeats 1 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("adapter"));

@@ -1,6 +1,7 @@
 #pragma once
-// Linear RGB float image and its outputs: 8-bit sRGB PNG (stb_image_write)
-// and PFM (float, for numerical comparison). Both written atomically.
+// Linear RGB float image and its outputs: 8-bit sRGB PNG (stb_image_write),
+// linear float OpenEXR (tinyexr) and PFM (float, for numerical comparison).
+// All written atomically.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -34,12 +35,18 @@ uint8_t linear_to_srgb8(float v);
 
 std::vector<uint8_t> to_srgb8(const Image& img);
 
-// Writes by extension: .png (8-bit sRGB) or .pfm (linear float). Throws
-// OutputError for other extensions or I/O failures.
+// Writes by extension, in any letter case: .png (8-bit sRGB), .exr or .pfm
+// (linear float). Throws OutputError for other extensions or I/O failures.
 void write_image(const Image& img, const std::string& path);
 
 // Reads a PFM written by write_image (for tests and comparisons).
 Image read_pfm(const std::string& path);
+
+// Reads an OpenEXR file's RGB channels (for tests and comparisons).
+Image read_exr(const std::string& path);
+
+// ".PNG" -> ".png"; "" without an extension.
+std::string lower_case_extension(const std::string& path);
 
 // Root mean square difference over all channels (images of equal size).
 double rmse(const Image& a, const Image& b);

@@ -1,5 +1,6 @@
 #include "tracer/integrator.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -158,6 +159,16 @@ class TileRenderer {
           }
         }
 
+        // The key light (a distant "sun"): a shadow ray towards it.
+        if (scene_.key_light.maxCoeff() > 0.0f) {
+          const float cos_s = n.dot(scene_.key_light_dir);
+          if (cos_s > 0.0f) {
+            shadow.emplace_back(origin, scene_.key_light_dir);
+            shadow_contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(scene_.key_light) * cos_s);
+            shadow_path.push_back(active[k]);
+          }
+        }
+
         // Continue the path by cosine-weighted sampling.
         const float b1 = path.rng.uniform(), b2 = path.rng.uniform();
         float pdf;
@@ -228,8 +239,12 @@ RenderResult render(const Scene& scene, const Accelerator& accel, const RenderSe
       const int d = ++done;
       if (settings.progress && timer.seconds() > 1.0) {
         std::lock_guard<std::mutex> lock(print_mutex);
-        std::fprintf(stderr, "\rrender: %3d%% (%d/%d tiles) %.1f s", 100 * d / tile_count, d, tile_count,
-                     timer.seconds());
+        // Rate and estimate from the tiles done so far (tiles cost alike on average).
+        const double elapsed = timer.seconds();
+        const double left = elapsed / d * (tile_count - d);
+        const double mrays = (rays.load() + shadow_rays.load()) / std::max(elapsed, 1e-9) * 1e-6;
+        std::fprintf(stderr, "\r\033[Krender: %3d%% (%d/%d tiles) %.1f s elapsed, %.2f Mrays/s, ~%.0f s left",
+                     100 * d / tile_count, d, tile_count, elapsed, mrays, left);
         std::fflush(stderr);
         printed = true;
       }
