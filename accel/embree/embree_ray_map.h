@@ -28,6 +28,8 @@ namespace raylab::embree_adapter {
 // the reference; no scene of ours reaches 1e18). tmin = -inf cannot be
 // shifted: Embree then sees only the part t >= 0.
 inline constexpr float kEmbreeLarge = 1.8e18f;  // just below Embree's FLT_LARGE
+// Below this largest direction component a ray is mapped (see embree_takes_as_is).
+inline constexpr float kEmbreeSmallDirection = 0x1p-40f;
 
 // Side-list entry for a ray that needed mapping (see map_ray).
 struct RayFix {
@@ -65,7 +67,12 @@ inline bool embree_takes_as_is(const Ray& r) {
     const float o = std::fabs(r.org[a]), d = std::fabs(r.dir[a]);
     if (!(o <= kEmbreeLarge) || !(d <= kEmbreeLarge) || (d != 0.0f && d < FLT_MIN)) return false;
   }
-  return r.dir[0] != 0.0f || r.dir[1] != 0.0f || r.dir[2] != 0.0f;
+  // A direction this short (e.g. (0, 0, FLT_MIN), found by fuzz_rays) makes
+  // Embree's flushed-to-zero products underflow, and it can answer a NaN or
+  // out-of-range distance: such rays take the mapped path, whose fix_hit turns
+  // NaN into a miss and clamps to [tmin, tmax], as the adapter always did.
+  const float dmax = std::max({std::fabs(r.dir[0]), std::fabs(r.dir[1]), std::fabs(r.dir[2])});
+  return dmax >= kEmbreeSmallDirection;
 }
 
 // Converts one ray; returns true when it needed mapping (`fix` then filled in).
