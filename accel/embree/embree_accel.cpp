@@ -398,15 +398,7 @@ void embree_direct_intersect(const Accelerator& embree, const PreparedRays& prep
   for (size_t i = 0; i < n; ++i) {
     RTCRayHit rh = p.rayhits[i];
     rtcIntersect1(scene, &ctx, &rh);
-    Hit& h = hits[i];
-    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
-      h.t = rh.ray.tfar;
-      h.u = rh.hit.u;
-      h.v = rh.hit.v;
-      h.prim = rh.hit.primID;
-    } else {
-      h = Hit{};
-    }
+    write_hit(rh, hits[i]);
   }
 }
 
