@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make pkg-config git
+  ccache             # rebuilds of many worktrees/branches share one compiler cache
   libembree-dev      # Embree 3: the reference accelerator
   libeigen3-dev      # vector math
   libstb-dev         # stb_image_write for PNG
