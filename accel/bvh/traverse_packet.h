@@ -56,6 +56,17 @@ inline void packet_ray_constants(const Ray& r, float inv[3], float near_shift[3]
   }
 }
 
+// Per-ray constants of the packet triangle test, one lane per ray: the
+// WatertightRay values (translated origin along the permuted axes, shear).
+// Used when every ray of the packet has the same axis permutation (camera
+// rays nearly always do), so one triangle's vertices are read once for all
+// lanes.
+struct PacketTriangleRays {
+  using V = simd::vfloat<kPacketSize>;
+  V ox, oy, oz, sx, sy, sz, tmin;
+  int kx = 0, ky = 1, kz = 2;
+};
+
 // True when the ray may join a packet: what the fast single-ray kernel takes.
 inline bool packet_ray_ok(const Ray& r) { return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f; }
 
@@ -74,6 +85,8 @@ class PacketTracer {
 
   // Subtrees entered by at most this many rays are finished ray by ray.
   static constexpr int kSingleRayBelow = 3;
+  // Leaves reached by at least this many rays test triangles packet-wise.
+  static constexpr int kPacketLeafFrom = 4;
 
   explicit PacketTracer(const WideView<N, W>& bvh) : bvh_(bvh) {}
 
@@ -135,6 +148,26 @@ class PacketTracer {
         pr.far_shift[a] = V::load(hi[a]);
       }
       pr.tmin = V::load(tmin);
+    }
+    // Triangle constants per lane, when all rays share the axis permutation.
+    PacketTriangleRays pt;
+    bool packet_leaves = true;
+    {
+      alignas(64) float ox[kPacketSize], oy[kPacketSize], oz[kPacketSize], sx[kPacketSize], sy[kPacketSize],
+          sz[kPacketSize], tmin[kPacketSize];
+      const WatertightRay w0(rays[simd::ctz(members)]);
+      pt.kx = w0.kx, pt.ky = w0.ky, pt.kz = w0.kz;
+      for (int i = 0; i < kPacketSize; ++i) {
+        const Ray& r = rays[(members >> i) & 1u ? i : simd::ctz(members)];
+        const WatertightRay w(r);
+        packet_leaves &= w.kx == pt.kx && w.ky == pt.ky && w.kz == pt.kz;
+        ox[i] = w.org[w.kx], oy[i] = w.org[w.ky], oz[i] = w.org[w.kz];
+        sx[i] = w.sx, sy[i] = w.sy, sz[i] = w.sz;
+        tmin[i] = r.tmin;
+      }
+      pt.ox = V::load(ox), pt.oy = V::load(oy), pt.oz = V::load(oz);
+      pt.sx = V::load(sx), pt.sy = V::load(sy), pt.sz = V::load(sz);
+      pt.tmin = V::load(tmin);
     }
     // Per-ray recorders (lanes without a ray: the first member's ray, never
     // used) and block-test constants (built at a ray's first leaf).
@@ -224,8 +257,13 @@ class PacketTracer {
         cur = ref_of[order[hit_children - 1]];
         active = mask_of[order[hit_children - 1]];
         continue;
+      } else if (packet_leaves && simd::popcount(active) >= kPacketLeafFrom) {
+        // Leaf, many rays: one triangle against all of them.
+        const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(cur);
+        const uint32_t nblocks = wide_ref::leaf_blocks(cur);
+        for (uint32_t b = 0; b < nblocks; ++b) packet_block(blocks[b], pt, active, rec, tmax, tmax_v);
       } else {
-        // Leaf: each active ray runs the single-ray block test.
+        // Leaf, few rays: each runs the single-ray block test.
         const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(cur);
         const uint32_t nblocks = wide_ref::leaf_blocks(cur);
         for (uint32_t m = active; m != 0; m &= m - 1) {
@@ -241,6 +279,69 @@ class PacketTracer {
       if (!pop(stack_tnear, stack_ref, stack_mask, sp, tmax_v, cur, active)) break;
     }
     for (uint32_t m = members; m != 0; m &= m - 1) hits[simd::ctz(m)] = rec[simd::ctz(m)].hit();
+  }
+
+  // The watertight test of intersect_block with rays in the lanes instead of
+  // triangles: for each lane the same operations in the same order on the
+  // same values (translate, shear, edge functions, the double-precision
+  // recomputation of an exactly-zero edge function, sign test, t = tt *
+  // (1 / det)), so each ray gets bit for bit the t, u, v its single-ray test
+  // gives. (intersect_block's early rejection of hits behind the origin only
+  // saves work: those lanes fail t >= tmin here.) Each hit is offered to the
+  // ray's recorder, whose tie rule makes the order irrelevant.
+  static void packet_block(const TriangleBlock<W>& blk, const PacketTriangleRays& r, uint32_t active, Rec* rec,
+                           float* tmax, V& tmax_v) {
+    const V zero = V::broadcast(0.0f);
+    const int count = blk.count();  // padding lanes repeat the first triangle
+    for (int j = 0; j < count; ++j) {
+      const V az0 = V::broadcast(blk.v[0][r.kz][j]) - r.oz;
+      const V bz0 = V::broadcast(blk.v[1][r.kz][j]) - r.oz;
+      const V cz0 = V::broadcast(blk.v[2][r.kz][j]) - r.oz;
+      const V ax = (V::broadcast(blk.v[0][r.kx][j]) - r.ox) - r.sx * az0;
+      const V ay = (V::broadcast(blk.v[0][r.ky][j]) - r.oy) - r.sy * az0;
+      const V bx = (V::broadcast(blk.v[1][r.kx][j]) - r.ox) - r.sx * bz0;
+      const V by = (V::broadcast(blk.v[1][r.ky][j]) - r.oy) - r.sy * bz0;
+      const V cx = (V::broadcast(blk.v[2][r.kx][j]) - r.ox) - r.sx * cz0;
+      const V cy = (V::broadcast(blk.v[2][r.ky][j]) - r.oy) - r.sy * cz0;
+      V u = cx * by - cy * bx;
+      V v = ax * cy - ay * cx;
+      V w = bx * ay - by * ax;
+      const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
+      if (zeros != 0) [[unlikely]] {
+        alignas(64) float fax[kPacketSize], fay[kPacketSize], fbx[kPacketSize], fby[kPacketSize], fcx[kPacketSize],
+            fcy[kPacketSize], fu[kPacketSize], fv[kPacketSize], fw[kPacketSize];
+        ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
+        u.store(fu), v.store(fv), w.store(fw);
+        for (uint32_t m = zeros; m != 0; m &= m - 1) {
+          const uint32_t i = simd::ctz(m);
+          fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
+          fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
+          fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
+        }
+        u = V::load(fu), v = V::load(fv), w = V::load(fw);
+      }
+      const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
+      const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
+      uint32_t mask = ~(neg & pos) & active;
+      if (mask == 0) continue;
+      const V det = u + v + w;
+      mask &= cmp_neq(det, zero);
+      if (mask == 0) continue;
+      const V tt = u * (r.sz * az0) + v * (r.sz * bz0) + w * (r.sz * cz0);
+      const V inv_det = V::broadcast(1.0f) / det;
+      const V t = tt * inv_det;
+      mask &= cmp_ge(t, r.tmin) & cmp_le(t, tmax_v);
+      if (mask == 0) continue;
+      alignas(64) float ft[kPacketSize], fu[kPacketSize], fv[kPacketSize];
+      t.store(ft);
+      (v * inv_det).store(fu);
+      (w * inv_det).store(fv);
+      for (uint32_t m = mask; m != 0; m &= m - 1) {
+        const uint32_t i = simd::ctz(m);
+        if (rec[i].record(ft[i], fu[i], fv[i], blk.prim[j])) tmax[i] = ft[i];
+      }
+      tmax_v = V::load(tmax);
+    }
   }
 
   // Next stack entry some ray of which can still find a closer hit there;
