@@ -52,7 +52,7 @@ AcceleratorInfo hgrid_accelerator_info() {
         return std::make_unique<HgridAccel>(opt, parse_triangle_test(p));
       }};
   info.caps.mt_variant = "tri=mt";
-  info.cover = {"hgrid:neighbours=pad", "hgrid:ratio=4", "hgrid:tri=mt"};
+  info.cover = {"hgrid:neighbours=pad"};
   info.stats = {{"occupied_levels", "levels holding triangles"},
                 {"level_span", "levels from the finest to the coarsest occupied one"},
                 {"finest_cell", "cell side of level 0 (the smallest triangle extent, >= 2^-18 of the scene)"},

@@ -117,14 +117,16 @@ class OctreeBuilder {
   const std::vector<Aabb>& boxes_;
 };
 
-// Breadth-first into the flat array: the eight children of a node are
-// allocated together, so one index finds all of them.
+// Depth-first into the flat array: the eight children of a node are
+// allocated together, so one index finds all of them, and a child's block
+// follows soon after its parent's (measured on Sponza: breadth-first order
+// left the walk waiting on node loads far more often).
 void flatten(const TmpNode& root, OctreeTree& tree) {
   std::deque<std::pair<const TmpNode*, uint32_t>> queue{{&root, 0u}};
   tree.nodes.assign(1, OctreeNode{});
   while (!queue.empty()) {
-    const auto [tmp, index] = queue.front();
-    queue.pop_front();
+    const auto [tmp, index] = queue.back();
+    queue.pop_back();
     if (tmp->refs.size() > kOctMaxNodeRefs)
       throw std::length_error(fmt::format("octree: a node holds {} triangles, at most {} supported", tmp->refs.size(),
                                           kOctMaxNodeRefs));
@@ -140,8 +142,8 @@ void flatten(const TmpNode& root, OctreeTree& tree) {
       tree.nodes.resize(tree.nodes.size() + 8);
       for (uint32_t ch = 0; ch < 8; ++ch) {
         if ((*tmp->kids)[ch].nonempty) mask |= 1u << ch;
-        queue.emplace_back(&(*tmp->kids)[ch], n.first_child + ch);
       }
+      for (uint32_t ch = 8; ch-- > 0;) queue.emplace_back(&(*tmp->kids)[ch], n.first_child + ch);
     }
     n.meta = OctreeNode::make_meta(static_cast<uint32_t>(tmp->refs.size()), mask);
     tree.nodes[index] = n;

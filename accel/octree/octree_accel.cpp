@@ -136,8 +136,7 @@ AcceleratorInfo octree_accelerator_info() {
         return std::make_unique<OctreeAccel<OctPointerLayout>>(opt, test);
       }};
   info.caps.mt_variant = "tri=mt";
-  info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash", "octree:tri=mt",
-                "octree:leaf=1,max_depth=8"};
+  info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash"};
   info.stats = {{"inner_nodes", "inner nodes"},
                 {"empty_leaves", "leaves without triangles"},
                 {"references", "triangle references in all nodes"},

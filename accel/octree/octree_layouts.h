@@ -42,6 +42,13 @@ struct OctPointerLayout {
     return OctNodeRec{n.first_child, n.first_ref, n.meta};
   }
   [[gnu::always_inline]] uint64_t child(uint64_t, const OctNodeRec& n, uint32_t c) const { return n.first_child + c; }
+  // The 96-byte child block (two cache lines), fetched while the children's
+  // intervals are computed: the walk otherwise waits on these loads.
+  [[gnu::always_inline]] void prefetch_children(const OctNodeRec& n) const {
+    const char* p = reinterpret_cast<const char*>(nodes + n.first_child);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+  }
 };
 
 struct OctLinearSlot {
@@ -60,6 +67,7 @@ struct OctLinearLayout {
     return OctNodeRec{0, s.first_ref, s.meta};
   }
   [[gnu::always_inline]] uint64_t child(uint64_t h, const OctNodeRec&, uint32_t c) const { return 8 * h + c; }
+  void prefetch_children(const OctNodeRec&) const {}
 };
 
 struct OctHashEntry {
@@ -84,6 +92,7 @@ struct OctHashLayout {
     return OctNodeRec{0, table[i].first_ref, table[i].meta};
   }
   [[gnu::always_inline]] uint64_t child(uint64_t code, const OctNodeRec&, uint32_t c) const { return code << 3 | c; }
+  void prefetch_children(const OctNodeRec&) const {}
 };
 
 // Memory of each layout for a tree of this shape (the two not built are

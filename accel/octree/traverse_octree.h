@@ -38,6 +38,7 @@
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/grid/mailbox.h"
 #include "accel/octree/octree_layouts.h"
 
 namespace raylab {
@@ -105,19 +106,27 @@ struct OctChild {
 [[gnu::always_inline]] inline int octree_child_order(float t0, float t1, const float near_end[3],
                                                     const float far_start[3], uint32_t neg_mask, uint32_t mask,
                                                     OctChild out[8]) {
+  // Entry of child b (ray order): the latest of t0 and the far_start of its
+  // far axes; exit: the earliest of t1 and the near_end of its near axes.
+  // Built up over the bits (each child from one with a bit fewer), 7 max
+  // and 7 min for all eight; `x > y ? x : y` keeps y when x is NaN (visit).
+  auto mx = [](float x, float y) { return x > y ? x : y; };
+  auto mn = [](float x, float y) { return x < y ? x : y; };
+  float enter[8], leave_c[8];  // leave_c[~b & 7] = exit of child b
+  enter[0] = t0;
+  leave_c[0] = t1;
+  for (int k = 0; k < 3; ++k) {
+    const int half = 1 << k;
+    for (int i = 0; i < half; ++i) {
+      enter[half + i] = mx(far_start[k], enter[i]);
+      leave_c[half + i] = mn(near_end[k], leave_c[i]);
+    }
+  }
   int n = 0;
   for (uint32_t b = 0; b < 8; ++b) {  // b: child in ray order (bit k = beyond plane k)
     const uint32_t c = b ^ neg_mask;
-    if (!(mask >> c & 1u)) continue;
-    float e0 = t0, e1 = t1;
-    for (int k = 0; k < 3; ++k) {
-      if (b >> k & 1u) {
-        e0 = far_start[k] > e0 ? far_start[k] : e0;  // NaN keeps e0: visit
-      } else {
-        e1 = near_end[k] < e1 ? near_end[k] : e1;
-      }
-    }
-    if (!(e0 <= e1)) continue;
+    const float e0 = enter[b], e1 = leave_c[7 - b];
+    if (!(mask >> c & 1u) || !(e0 <= e1)) continue;
     // Insertion by entry parameter; ties keep ray order (fewer planes crossed first).
     int i = n++;
     while (i > 0 && out[i - 1].t0 > e0) {
@@ -136,6 +145,7 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
   OctRay r;
   if (!oct_enter_root(tree.cube, ray, r)) return rec.hit();
   const TrianglePrecompute<kTest> pre(ray);
+  RayMailbox mailbox;
 
   struct Entry {
     uint64_t handle;
@@ -153,14 +163,19 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
     rec.count_nodes(1);
     const OctNodeRec node = tree.layout.node(cur.handle, cur.level);
     const uint32_t count = node.meta >> 8;
-    if (count) {
-      if (intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + node.first_ref, count, rec)) {
+    // Exact assignment lists a large triangle in many leaves: the mailbox
+    // tests it once per ray (a miss stays a miss, a hit is already recorded).
+    const uint32_t* ids = tree.ids + node.first_ref;
+    for (uint32_t i = 0; i < count; ++i) {
+      if (mailbox.seen(ids[i])) continue;
+      if (intersect_leaf_triangle(pre, ray, tree.tris[ids[i]], rec)) {
         if constexpr (kAnyHit) return rec.hit();
       }
     }
     const float t_bound = rec.tmax() + r.delta_t;
     const uint32_t mask = node.meta & 0xffu;
     if (mask) {
+      tree.layout.prefetch_children(node);
       const uint32_t half = OctreeCube::span(cur.level + 1);
       float near_end[3], far_start[3];
       for (int k = 0; k < 3; ++k) {
