@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "accel/registry.h"
-#include "scenes/procedural.h"
+#include "tests/accel_test_util.h"
 
 namespace raylab {
 namespace {
@@ -49,7 +49,7 @@ TEST(StructureOutline, BudgetStopsAndMarksTruncated) {
 }
 
 TEST(StructureOutline, EveryStructureDrawsWithinTheSceneAndByDepth) {
-  const Scene scene = make_triangle_soup(400, 7);
+  const test::NamedMesh scene = test::soup(400, 7);
   const Aabb allowed = allowed_box(scene.mesh);
   for (const auto& info : accelerator_registry()) {
     SCOPED_TRACE(info.name);
@@ -81,7 +81,7 @@ TEST(StructureOutline, EveryStructureDrawsWithinTheSceneAndByDepth) {
 TEST(StructureOutline, BvhLeavesCoverEveryTriangle) {
   // At a depth beyond the tree's, the leaf boxes of a BVH together contain
   // every triangle: each triangle's centroid lies in some leaf box.
-  const Scene scene = make_triangle_soup(300, 11);
+  const test::NamedMesh scene = test::soup(300, 11);
   for (const std::string spec : {"bvh:layout=bvh2", "bvh:layout=bvh8", "bvh:layout=bvh4"}) {
     SCOPED_TRACE(spec);
     auto accel = make_accelerator(spec);
@@ -101,7 +101,7 @@ TEST(StructureOutline, BvhLeavesCoverEveryTriangle) {
 }
 
 TEST(StructureOutline, KdTreeDrawsSplitPlanesInsideTheirCells) {
-  const Scene scene = make_triangle_soup(300, 5);
+  const test::NamedMesh scene = test::soup(300, 5);
   auto accel = make_accelerator("kdtree");
   accel->build(scene.mesh);
   const StructureOutline one = outline_of(*accel, 0);
@@ -118,7 +118,7 @@ TEST(StructureOutline, KdTreeDrawsSplitPlanesInsideTheirCells) {
 TEST(StructureOutline, GridCellsAreTheOccupiedCells) {
   // The picture draws exactly the non-empty cells the build counted
   // (grid2: the non-empty cells of its sub-grids, at depth 2).
-  const Scene scene = make_triangle_soup(200, 3, 0.2f);
+  const test::NamedMesh scene = test::soup(200, 3, 0.2f);
   for (const std::string name : {"grid", "hashgrid", "grid2"}) {
     SCOPED_TRACE(name);
     auto accel = make_accelerator(name);
