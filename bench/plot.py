@@ -138,15 +138,21 @@ def style_of(spec, specs):
 
 
 def log_ticks(ax, axis="both"):
-    """Readable log axes: ticks at 1, 2, 5 x 10^k with plain numbers, not one lone label."""
-    from matplotlib.ticker import FuncFormatter, LogLocator
-    fmt = FuncFormatter(lambda v, _: f"{v:g}")
+    """Readable log axes: within three decades ticks at 1, 2, 5 x 10^k as plain numbers;
+    wider ranges one tick per decade as powers of ten (never one lone label, never overlaps)."""
+    from matplotlib.ticker import FuncFormatter, LogFormatterSciNotation, LogLocator
     for which in (["x", "y"] if axis == "both" else [axis]):
         a = ax.xaxis if which == "x" else ax.yaxis
         if (ax.get_xscale() if which == "x" else ax.get_yscale()) != "log":
             continue
-        a.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=12))
-        a.set_major_formatter(fmt)
+        lo, hi = sorted(ax.get_xlim() if which == "x" else ax.get_ylim())
+        decades = math.log10(hi / lo) if lo > 0 and hi > lo else 1.0
+        if decades <= 3:
+            a.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=12))
+            a.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        else:
+            a.set_major_locator(LogLocator(base=10, numticks=12))
+            a.set_major_formatter(LogFormatterSciNotation())
         a.set_minor_formatter(FuncFormatter(lambda v, _: ""))
 
 

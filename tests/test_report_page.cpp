@@ -44,10 +44,19 @@ class ReportPage : public ::testing::Test {
         "stress --scenario single --accel bvh,grid" + q + "-o " + (d / "stress.json").string(),
         "render soup:n=300 --accel bvh,grid --aov tris --size 20x20 -o " + (d / "heatmaps" / "soup_tris.png").string(),
         "show soup:n=300 --accel bvh --size 24x24 -o " + (d / "structures" / "bvh.png").string(),
+        "bench soup:n=300 --accel grid --sweep density=0.5,2 --ray-sets primary --size 16x16 --repeats 1" + q +
+            "-o " + (d / "sweep_density.json").string(),
+        "PLOT",
         "report " + d.string() + " -o " + (*dir_ / "report.html").string(),
     };
     output_ = new std::string;
     for (const auto& args : runs) {
+      if (args == "PLOT") {  // bench/plot.py's charts, which the report embeds from run/charts
+        const std::string cmd = std::string("/usr/bin/python3 ") + RAYLAB_SOURCE_DIR + "/bench/plot.py --raylab " +
+                                RAYLAB_BINARY + " --dir " + d.string() + " --out " + (d / "charts").string() + " > /dev/null";
+        plot_exit_ = std::system(cmd.c_str());
+        continue;
+      }
       const auto r = test::run_raylab(args);
       *output_ += "$ raylab " + args + "\n" + r.output;
       if (r.exit_code != 0) {
@@ -63,9 +72,10 @@ class ReportPage : public ::testing::Test {
     delete output_;
   }
   static fs::path* dir_;
-  static int exit_code_;
+  static int exit_code_, plot_exit_;
   static std::string* output_;
 };
+int ReportPage::plot_exit_ = -1;
 fs::path* ReportPage::dir_ = nullptr;
 int ReportPage::exit_code_ = -1;
 std::string* ReportPage::output_ = nullptr;
@@ -84,7 +94,7 @@ TEST_F(ReportPage, EveryChartAndTableIsPresent) {
   // The pictures are embedded, nothing is fetched.
   size_t images = 0;
   for (size_t p = 0; (p = html.find("src=\"data:image/png;base64,", p)) != std::string::npos; ++p) ++images;
-  EXPECT_EQ(images, 2u);
+  EXPECT_EQ(images, 2u);  // the cost sheet and the structure picture
   EXPECT_THAT(html, Not(HasSubstr("src=\"http")));
   EXPECT_THAT(html, Not(HasSubstr("href=\"http")));
   EXPECT_THAT(html, Not(HasSubstr("<script")));
@@ -98,6 +108,23 @@ TEST_F(ReportPage, EveryChartAndTableIsPresent) {
   EXPECT_THAT(md, HasSubstr("<!-- headline:end -->"));
   EXPECT_THAT(md, HasSubstr("| bvh |"));
   EXPECT_TRUE(fs::exists(*dir_ / "report_files" / "chart-leaderboard-primary.svg"));
+}
+
+TEST_F(ReportPage, PlotDrawsOneChartPerSweptParameterAndSpeedAgainstMemory) {
+  ASSERT_EQ(exit_code_, 0) << *output_;
+  ASSERT_EQ(plot_exit_, 0);
+  const fs::path charts = *dir_ / "run" / "charts";
+  for (const char* name : {"speed_vs_accuracy", "build_vs_trace", "speed_vs_memory", "sweep_density"}) {
+    EXPECT_TRUE(fs::exists(charts / (std::string(name) + ".png"))) << name;
+    EXPECT_TRUE(fs::exists(charts / (std::string(name) + ".svg"))) << name;
+  }
+  // No sweep chart for a parameter nobody swept.
+  EXPECT_FALSE(fs::exists(charts / "sweep_leaf.png"));
+  // The report embeds every plot.py chart inline.
+  const std::string html = slurp(*dir_ / "report.html");
+  size_t plots = 0;
+  for (size_t p = 0; (p = html.find("<figure class=\"plot\"><svg", p)) != std::string::npos; ++p) ++plots;
+  EXPECT_EQ(plots, 4u);
 }
 
 TEST_F(ReportPage, LoadsInHeadlessChromiumWithoutConsoleMessages) {
