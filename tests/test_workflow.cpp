@@ -138,6 +138,24 @@ TEST(Workflow, SnakefilePlansTheQuickPreset) {
   EXPECT_THAT(r.output, HasSubstr("bench_cell 48 2 2"));
   EXPECT_THAT(r.output, HasSubstr("scaling_cell 24 2 2"));
   EXPECT_THAT(r.output, HasSubstr("merge_bench 1 1 1"));
+  // The pictures and the page (issue 18) are part of the study...
+  for (const char* rule : {"heatmaps 1 ", "structures 1 ", "report 1 ", "charts 1 "})
+    EXPECT_THAT(r.output, HasSubstr(rule)) << rule;
+  // ...and every file the workflow writes is under its output directory: `make bench`
+  // leaves the checkout clean.
+  std::istringstream lines(r.output);
+  size_t outputs = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const auto at = line.find("output: ");
+    if (at == std::string::npos) continue;
+    std::istringstream files(line.substr(at + 8));
+    for (std::string f; std::getline(files, f, ',');) {
+      f.erase(0, f.find_first_not_of(' '));
+      ++outputs;
+      EXPECT_EQ(f.rfind(dir.string(), 0), 0u) << "written outside out/: " << f;
+    }
+  }
+  EXPECT_GT(outputs, 50u);
   fs::remove_all(dir);
 }
 
