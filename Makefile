@@ -57,6 +57,8 @@ docs: bench
 	mkdir -p docs/charts docs/pictures
 	cp out/bench/charts/*.png docs/charts/
 	cp out/bench/heatmaps/*.png out/bench/structures/*.png docs/pictures/
+	sed -i -e 's|(\.\./out/bench/heatmaps/|(pictures/|' -e 's|(\.\./out/bench/structures/|(pictures/|' \
+	       -e 's|(\.\./out/bench/charts/\([^)]*\)\.svg)|(charts/\1.png)|' docs/results.md
 	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
 
 microbench: configure
