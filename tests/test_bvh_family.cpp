@@ -731,15 +731,14 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
 
 TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   // Coherent camera rays (pixel order, a partial last packet) with invalid,
-  // axis-parallel and tmin < 0 rays mixed in, through bvh:packet=16 and the
-  // single-ray kernel: every field equal. Coincident copies of a triangle
+  // axis-parallel, tmin < 0 and short rays mixed in, through bvh:packet=16
+  // and the single-ray kernel: every field equal, and occlusion agrees. Coincident copies of a triangle
   // make exact ties, which both must give to the lowest primitive id.
   for (const Reference& ref : references()) {
-    Scene s = ref.scene;
+    test::NamedMesh s = ref.scene;
     const size_t n = s.mesh.triangles.size();
     for (size_t i = 0; i < std::min<size_t>(n, 200); ++i) s.mesh.triangles.push_back(s.mesh.triangles[i]);
-    RaySet primary = make_primary_rays(s, 47, 40);
-    std::vector<Ray> rays = primary.rays;
+    std::vector<Ray> rays = test::camera_rays(s.mesh, 47, 40);
     for (size_t i = 5; i < rays.size(); i += 97) rays[i].dir = Vec3f(0, 0, 0);   // invalid
     for (size_t i = 9; i < rays.size(); i += 89) rays[i].dir.x() = 0.0f;          // axis-parallel component
     for (size_t i = 13; i < rays.size(); i += 83) rays[i].tmin = -1.0f;           // tmin < 0
@@ -770,6 +769,12 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
       }
       EXPECT_EQ(bad, 0u) << spec << " on " << s.name;
       EXPECT_GT(hits, rays.size() / 10) << s.name;
+      // Occlusion through packets: occluded exactly when the closest hit exists.
+      std::vector<uint8_t> occ(rays.size());
+      packet->occluded(rays, occ);
+      size_t occ_bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i) occ_bad += (occ[i] != 0) != a[i].valid();
+      EXPECT_EQ(occ_bad, 0u) << spec << " occlusion on " << s.name;
     }
   }
 }
