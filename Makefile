@@ -50,15 +50,15 @@ report: configure
 	./$(BUILD)/raylab report out/bench -o out/report.html
 
 # Regenerates what the README and docs/results.md show, explicitly: runs the quick study,
-# then writes docs/results.md (+ docs/results_files/), copies the charts and pictures to
-# docs/charts/ and replaces the README's headline block between its results markers.
+# then writes docs/results.md (+ its charts in docs/results_files/), copies the plot.py charts
+# there and the pictures to docs/pictures/, and replaces the README's headline block.
 docs: bench
 	./$(BUILD)/raylab report out/bench -o out/report.html --md docs/results.md
-	mkdir -p docs/charts docs/pictures
-	cp out/bench/charts/*.png docs/charts/
+	mkdir -p docs/results_files docs/pictures
+	cp out/bench/charts/*.png docs/results_files/
 	cp out/bench/heatmaps/*.png out/bench/structures/*.png docs/pictures/
 	sed -i -e 's|(\.\./out/bench/heatmaps/|(pictures/|' -e 's|(\.\./out/bench/structures/|(pictures/|' \
-	       -e 's|(\.\./out/bench/charts/\([^)]*\)\.svg)|(charts/\1.png)|' docs/results.md
+	       -e 's|(\.\./out/bench/charts/\([^)]*\)\.svg)|(results_files/\1.png)|' docs/results.md
 	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
 
 microbench: configure
