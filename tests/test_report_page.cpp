@@ -80,7 +80,10 @@ fs::path* ReportPage::dir_ = nullptr;
 int ReportPage::exit_code_ = -1;
 std::string* ReportPage::output_ = nullptr;
 
-TEST_F(ReportPage, EveryChartAndTableIsPresent) {
+// One test (the tiny run behind it is set up once per process, and ctest runs
+// every test in its own process): the page, plot.py's charts, the browser.
+TEST_F(ReportPage, ChartsTablesPlotsAndHeadlessChromium) {
+  {  // every chart and table is present
   ASSERT_EQ(exit_code_, 0) << *output_;
   const std::string html = slurp(*dir_ / "report.html");
   for (const char* id : {"chart-leaderboard-primary", "chart-leaderboard-random", "table-leaderboard-primary",
@@ -108,9 +111,8 @@ TEST_F(ReportPage, EveryChartAndTableIsPresent) {
   EXPECT_THAT(md, HasSubstr("<!-- headline:end -->"));
   EXPECT_THAT(md, HasSubstr("| bvh |"));
   EXPECT_TRUE(fs::exists(*dir_ / "report_files" / "chart-leaderboard-primary.svg"));
-}
-
-TEST_F(ReportPage, PlotDrawsOneChartPerSweptParameterAndSpeedAgainstMemory) {
+  }
+  {  // plot.py: one chart per swept parameter, and speed against memory
   ASSERT_EQ(exit_code_, 0) << *output_;
   ASSERT_EQ(plot_exit_, 0);
   const fs::path charts = *dir_ / "run" / "charts";
@@ -125,9 +127,8 @@ TEST_F(ReportPage, PlotDrawsOneChartPerSweptParameterAndSpeedAgainstMemory) {
   size_t plots = 0;
   for (size_t p = 0; (p = html.find("<figure class=\"plot\"><svg", p)) != std::string::npos; ++p) ++plots;
   EXPECT_EQ(plots, 4u);
-}
-
-TEST_F(ReportPage, LoadsInHeadlessChromiumWithoutConsoleMessages) {
+  }
+  {  // headless Chromium loads the page without console messages; the screenshot is not blank
   ASSERT_EQ(exit_code_, 0) << *output_;
   ASSERT_EQ(std::system("command -v chromium > /dev/null 2>&1"), 0)
       << "chromium is missing: run scripts/install-deps.sh (Debian package chromium)";
@@ -155,6 +156,7 @@ TEST_F(ReportPage, LoadsInHeadlessChromiumWithoutConsoleMessages) {
   EXPECT_GT(inked, static_cast<size_t>(w * h / 100)) << "screenshot looks blank";
   EXPECT_GT(colours.size(), 20u);
   EXPECT_TRUE(colours.count(0x1f77b4)) << "bvh's bar colour not on screen";
+  }
 }
 
 TEST(ReportInput, BadInputIsRejected) {
