@@ -51,6 +51,13 @@ struct AcceleratorInfo {
   // Run-time facts as (key, value) pairs, e.g. Embree's {version, isa};
   // reports record them as <name>_<key>. Empty function = none.
   std::function<Description()> describe{};
+  // Peak resident bytes per triangle of building and holding the structure
+  // with its default parameters, above the loaded scene: `raylab bench`
+  // estimates a build's memory from it and skips what would not fit. Measure
+  // with `raylab bench --scene soup:n=10000000 --accel NAME` (rss_peak_bytes -
+  // rss_before_build_bytes) and round up. 0 = not declared: bench assumes the
+  // largest figure any structure declares.
+  double build_peak_bytes_per_triangle = 0;
 };
 
 // A name no structure may take: tests use it as "an unknown accelerator"

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "base/spec.h"
+
 namespace raylab::cli {
 
 namespace {
@@ -16,17 +18,6 @@ namespace {
 bool parse_float(const std::string& s, float& v) {
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   return ec == std::errc() && p == s.data() + s.size() && std::isfinite(v);
-}
-
-std::vector<std::string> split(const std::string& text, char sep) {
-  std::vector<std::string> out;
-  size_t start = 0;
-  while (true) {
-    const auto at = text.find(sep, start);
-    out.push_back(text.substr(start, at == std::string::npos ? std::string::npos : at - start));
-    if (at == std::string::npos) return out;
-    start = at + 1;
-  }
 }
 
 }  // namespace
@@ -54,7 +45,7 @@ void apply_camera_option(const std::string& text, View& view) {
       throw std::invalid_argument(fmt::format("--camera {}: unknown key '{}' (keys: from, at, up, fov)", text, key));
     }
   };
-  for (const auto& token : split(text, ',')) {
+  for (const auto& token : split_at(text, ',')) {
     const auto eq = token.find('=');
     std::string number = token;
     if (eq != std::string::npos) {
@@ -92,7 +83,7 @@ void apply_up_axis(const std::string& axis, Scene& scene) {
 }
 
 Vec3f parse_background(const std::string& text) {
-  const auto parts = split(text, ',');
+  const auto parts = split_at(text, ',');
   float c[3];
   if (parts.size() != 1 && parts.size() != 3)
     throw std::invalid_argument(fmt::format("--background {}: expected one value (grey) or r,g,b", text));

@@ -65,6 +65,18 @@ std::string pick_scene(const std::string& command, const std::string& option, co
   return option.empty() ? fallback : option;
 }
 
+std::string ray_set_size_note(const std::string& set, size_t asked, size_t got) {
+  if (got == asked) return {};
+  const bool secondary = set == "diffuse" || set == "shadow";
+  return fmt::format("note: ray set '{}' holds {} rays, not {}{}\n", set, got, asked,
+                     secondary ? " (its rays start from primary hits; primary rays that miss give none)" : "");
+}
+
+void add_scene_options(CLI::App* cmd, std::string& positional, std::string& option, const std::string& help) {
+  cmd->add_option("scene", positional, help);
+  cmd->add_option("--scene", option, "the scene, as the positional argument");
+}
+
 CLI::Option* add_threads_option(CLI::App* cmd, int& threads) {
   return cmd->add_option("-t,--threads", threads, "worker threads (0 = all cores)")
       ->capture_default_str()

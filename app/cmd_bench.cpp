@@ -82,19 +82,95 @@ std::string csv_path_for(const std::string& json) {
   return json + ".csv";
 }
 
+struct BenchCli {
+  std::string accel = "embree,bvh", ray_sets = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
+  std::vector<std::string> scenes, positional_scenes, scales, sweeps;
+  size_t random_rays = 262144, brute_max_tris = 0;
+  double memory_headroom = 0.95;
+  int repeats = 5, build_repeats = 1;
+  uint64_t seed = 1;
+  bool quiet = false, selfcheck = false;
+};
+
+// --preset: its values for the options not given; then the default threads.
+void apply_preset(BenchCli& o, const CLI::App& cmd) {
+  if (!o.preset.empty()) {
+    const Preset p = find_preset(o.preset);
+    auto unset = [&](const char* name) { return cmd.count(name) == 0; };
+    if (unset("--scene") && unset("--scale") && o.positional_scenes.empty()) o.scenes = {p.scenes};
+    if (unset("--accel")) o.accel = p.accel;
+    if (unset("--ray-sets")) o.ray_sets = p.rays;
+    if (unset("--threads")) o.threads = p.threads;
+    if (unset("--size")) o.size = p.size;
+    if (unset("--rays")) o.random_rays = p.random_rays;
+    if (unset("--repeats")) o.repeats = p.repeats;
+    if (unset("--build-repeats")) o.build_repeats = p.build_repeats;
+    if (unset("--brute-max-tris")) o.brute_max_tris = p.brute_max_tris;
+  }
+  if (o.threads.empty()) o.threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
+}
+
+// --accel expanded, then every --sweep applied.
+std::vector<std::string> accel_specs_of(const BenchCli& o) {
+  auto specs = expand_accelerator_list(o.accel);
+  for (const auto& sweep : o.sweeps) {
+    const auto eq = sweep.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw std::invalid_argument(fmt::format("--sweep {}: expected PARAM=v1,v2,...", sweep));
+    specs = apply_sweep(specs, sweep.substr(0, eq), parse_name_list(sweep.substr(eq + 1)));
+  }
+  return specs;
+}
+
+// Positional scenes, --scene lists and --scale expansions; cornell when none.
+std::vector<std::string> scene_specs_of(const BenchCli& o) {
+  std::vector<std::string> scene_specs = o.positional_scenes;
+  for (const auto& s : o.scenes)
+    for (const auto& one : split_spec_list(s)) scene_specs.push_back(one);
+  for (const auto& s : o.scales)
+    for (const auto& one : expand_scale(s)) scene_specs.push_back(one);
+  if (scene_specs.empty()) scene_specs.push_back("cornell");
+  return scene_specs;
+}
+
+// --embree-selfcheck: the adapter against a direct Embree loop, no other timing.
+int run_embree_selfcheck(const BenchCli& o, const std::vector<std::string>& scene_specs,
+                         const std::vector<RaySet>& file_sets) {
+  RaySetOptions rso;
+  std::tie(rso.width, rso.height) = parse_size(o.size);
+  rso.random_count = o.random_rays;
+  rso.seed = o.seed;
+  const auto names = parse_name_list(o.ray_sets);
+  std::vector<SelfCheckRow> rows;
+  for (const auto& spec : scene_specs) {
+    const Scene scene = load_scene(spec);
+    const auto r = file_sets.empty() ? embree_selfcheck(scene, names, rso, o.repeats)
+                                     : embree_selfcheck_sets(scene, file_sets, o.repeats);
+    rows.insert(rows.end(), r.begin(), r.end());
+    if (!o.quiet) std::fprintf(stderr, "selfcheck %s done\n", scene.name.c_str());
+  }
+  std::printf("embree self-check: adapter (as raylab bench times it) vs direct rtcIntersect1/rtcOccluded1 loop, "
+              "Mrays/s, 1 thread, median of %d\n%s",
+              o.repeats, format_selfcheck_table(rows).c_str());
+  if (!o.json.empty()) {
+    nlohmann::json recs = nlohmann::json::array();
+    for (const auto& r : rows)
+      recs.push_back({{"scene", r.scene}, {"ray_set", r.ray_set}, {"rays", r.rays},
+                      {"adapter_mrays_per_s", r.adapter_mrays_per_s}, {"direct_mrays_per_s", r.direct_mrays_per_s},
+                      {"ratio", r.ratio}, {"identical", r.identical}, {"prepare_ms", r.prepare_ms}});
+    write_json_report(o.json, report_header("bench --embree-selfcheck"), recs);
+  }
+  bool identical = true;
+  for (const auto& r : rows) identical &= r.identical;
+  return identical ? 0 : kExitCheckFailed;
+}
+
+int run_bench_command(BenchCli& o, const CLI::App& cmd);
+
 }  // namespace
 
 Runner add_bench(CLI::App& app) {
-  struct Opts {
-    std::string accel = "embree,bvh", ray_sets = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
-    std::vector<std::string> scenes, positional_scenes, scales, sweeps;
-    size_t random_rays = 262144, brute_max_tris = 0;
-    double memory_headroom = 0.95;
-    int repeats = 5, build_repeats = 1;
-    uint64_t seed = 1;
-    bool quiet = false, selfcheck = false;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<BenchCli>();
   CLI::App* cmd = app.add_subcommand("bench", "time accelerators on the same rays, as ratios to Embree");
   cmd->add_option("scene", o->positional_scenes,
                   "scenes: procedural specs, mesh files or JSON scene files (several allowed; default cornell)");
@@ -130,178 +206,129 @@ Runner add_bench(CLI::App& app) {
                 "time the embree accelerator against a plain rtcIntersect1/rtcOccluded1 loop on the same prepared rays "
                 "(one thread, thread CPU time, median of --repeats) and print the ratios; no other timing");
 
-  return [o, cmd]() {
-    if (!o->preset.empty()) {
-      const Preset p = find_preset(o->preset);
-      auto unset = [&](const char* name) { return cmd->count(name) == 0; };
-      if (unset("--scene") && unset("--scale") && o->positional_scenes.empty()) o->scenes = {p.scenes};
-      if (unset("--accel")) o->accel = p.accel;
-      if (unset("--ray-sets")) o->ray_sets = p.rays;
-      if (unset("--threads")) o->threads = p.threads;
-      if (unset("--size")) o->size = p.size;
-      if (unset("--rays")) o->random_rays = p.random_rays;
-      if (unset("--repeats")) o->repeats = p.repeats;
-      if (unset("--build-repeats")) o->build_repeats = p.build_repeats;
-      if (unset("--brute-max-tris")) o->brute_max_tris = p.brute_max_tris;
-    }
-    if (o->threads.empty()) o->threads = hardware_threads() > 1 ? fmt::format("1,{}", hardware_threads()) : "1";
-    auto specs = expand_accelerator_list(o->accel);
-    for (const auto& sweep : o->sweeps) {
-      const auto eq = sweep.find('=');
-      if (eq == std::string::npos || eq == 0)
-        throw std::invalid_argument(fmt::format("--sweep {}: expected PARAM=v1,v2,...", sweep));
-      specs = apply_sweep(specs, sweep.substr(0, eq), parse_name_list(sweep.substr(eq + 1)));
-    }
-    std::vector<std::string> scene_specs = o->positional_scenes;
-    for (const auto& s : o->scenes)
-      for (const auto& one : split_spec_list(s)) scene_specs.push_back(one);
-    for (const auto& s : o->scales)
-      for (const auto& one : expand_scale(s)) scene_specs.push_back(one);
-    if (scene_specs.empty()) scene_specs.push_back("cornell");
-    std::vector<RaySet> file_sets;
-    if (!o->ray_file.empty()) {
-      if (scene_specs.size() != 1)
-        throw std::invalid_argument("--ray-file: give exactly one scene (the scene the rays were made for)");
-      if (cmd->count("--ray-sets")) throw std::invalid_argument("--ray-file replaces --ray-sets: give one of them");
-      file_sets.push_back(read_ray_file(o->ray_file).set);
-    }
-
-    if (o->selfcheck) {
-      RaySetOptions rso;
-      std::tie(rso.width, rso.height) = parse_size(o->size);
-      rso.random_count = o->random_rays;
-      rso.seed = o->seed;
-      const auto names = parse_name_list(o->ray_sets);
-      std::vector<SelfCheckRow> rows;
-      for (const auto& spec : scene_specs) {
-        const Scene scene = load_scene(spec);
-        const auto r = file_sets.empty() ? embree_selfcheck(scene, names, rso, o->repeats)
-                                         : embree_selfcheck_sets(scene, file_sets, o->repeats);
-        rows.insert(rows.end(), r.begin(), r.end());
-        if (!o->quiet) std::fprintf(stderr, "selfcheck %s done\n", scene.name.c_str());
-      }
-      std::printf("embree self-check: adapter (as raylab bench times it) vs direct rtcIntersect1/rtcOccluded1 loop, "
-                  "Mrays/s, 1 thread, median of %d\n%s",
-                  o->repeats, format_selfcheck_table(rows).c_str());
-      if (!o->json.empty()) {
-        nlohmann::json recs = nlohmann::json::array();
-        for (const auto& r : rows)
-          recs.push_back({{"scene", r.scene}, {"ray_set", r.ray_set}, {"rays", r.rays},
-                          {"adapter_mrays_per_s", r.adapter_mrays_per_s}, {"direct_mrays_per_s", r.direct_mrays_per_s},
-                          {"ratio", r.ratio}, {"identical", r.identical}, {"prepare_ms", r.prepare_ms}});
-        write_json_report(o->json, report_header("bench --embree-selfcheck"), recs);
-      }
-      bool identical = true;
-      for (const auto& r : rows) identical &= r.identical;
-      return identical ? 0 : kExitCheckFailed;
-    }
-
-    BenchOptions bo;
-    bo.ray_sets = parse_name_list(o->ray_sets);
-    bo.threads = parse_thread_list(o->threads);
-    std::tie(bo.width, bo.height) = parse_size(o->size);
-    bo.random_rays = o->random_rays;
-    bo.repeats = o->repeats;
-    bo.build_repeats = o->build_repeats;
-    bo.brute_max_triangles = o->brute_max_tris;
-    bo.seed = o->seed;
-    bo.memory_headroom = o->memory_headroom;
-    bo.given_sets = file_sets;
-    if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
-    const std::string csv = !o->csv.empty() ? o->csv : (o->json.empty() ? std::string() : csv_path_for(o->json));
-
-    nlohmann::json header = report_header("bench");
-    header["preset"] = o->preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->preset);
-    header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
-                         {"threads", bo.threads},     {"size", o->size},         {"random_rays", bo.random_rays},
-                         {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
-                         {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
-                         {"ray_file", o->ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o->ray_file)}};
-    std::vector<BenchRecord> all;
-    std::vector<BenchSkip> skipped;
-    auto save = [&](bool complete) {
-      if (!o->json.empty()) {
-        nlohmann::json recs = nlohmann::json::array();
-        for (const auto& r : all) recs.push_back(r.to_json());
-        nlohmann::json h = header;
-        h["complete"] = complete;
-        h["skipped"] = nlohmann::json::array();
-        for (const auto& s : skipped) h["skipped"].push_back(s.to_json());
-        write_json_report(o->json, h, recs);
-      }
-      if (!csv.empty()) write_file_atomically(csv, bench_csv(all));
-    };
-
-    const bool show = !o->quiet;
-    const bool tty = show && isatty(fileno(stderr));
-    InterruptGuard interrupt;  // Ctrl-C: finish the current cell, keep the records
-    bo.stop = interrupt.flag();
-    size_t done_scenes = 0;
-    for (const auto& spec : scene_specs) {
-      if (interrupt.interrupted()) break;
-      if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
-      const Scene scene = load_scene(spec);
-      const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
-      const size_t cells = cell_specs.size() * bo.ray_sets.size() * bo.threads.size();
-      if (show && cell_specs.size() < specs.size())
-        std::fprintf(stderr, "%sbench: %s: brute skipped (%zu triangles > --brute-max-tris %zu)\n", tty ? "\r\033[K" : "",
-                     scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
-      size_t done = 0;
-      BenchProgress progress;
-      const auto scene_start = std::chrono::steady_clock::now();
-      if (tty)
-        progress = [&](const std::string& m) {
-          const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_start).count();
-          const std::string eta =
-              done > 0 && cells > done ? fmt::format(", ~{} left in this scene", format_duration(elapsed / done * (cells - done)))
-                                       : std::string();
-          std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu, %s%s] %s", done_scenes + 1, scene_specs.size(),
-                       done + 1, cells, format_duration(elapsed).c_str(), eta.c_str(), m.c_str());
-          std::fflush(stderr);
-        };
-      std::set<std::string> noted;
-      const size_t primary_rays = static_cast<size_t>(bo.width) * bo.height;
-      const auto records = run_bench(scene, specs, bo, progress, [&](const BenchRecord& r) {
-        ++done;
-        all.push_back(r);
-        save(false);
-        const size_t asked = r.ray_set == "random" ? bo.random_rays : primary_rays;
-        if (show && r.rays != asked && noted.insert(r.ray_set).second)
-          std::fprintf(stderr, "%snote: %s: ray set '%s' holds %zu rays, not %zu%s\n", tty ? "\r\033[K" : "",
-                       r.scene.c_str(), r.ray_set.c_str(), r.rays, asked,
-                       r.ray_set == "diffuse" || r.ray_set == "shadow"
-                           ? " (its rays start from primary hits; primary rays that miss give none)"
-                           : "");
-        if (show && !tty)
-          std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
-                       done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
-                       r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
-      }, [&](const BenchSkip& skip) {
-        skipped.push_back(skip);
-        save(false);
-        std::printf("bench %s: %s skipped: %s\n", skip.scene.c_str(), skip.accel.c_str(), skip.reason.c_str());
-      });
-      // The returned records carry the best-Embree figures of the whole run.
-      if (all.size() >= records.size()) {
-        std::copy(records.begin(), records.end(), all.end() - static_cast<std::ptrdiff_t>(records.size()));
-        save(false);
-      }
-      if (tty) std::fprintf(stderr, "\r\033[K");
-      std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
-                  format_bench_table(records).c_str());
-      std::printf("%s", format_build_summary(records).c_str());
-      std::fflush(stdout);
-      ++done_scenes;
-    }
-    const bool interrupted = interrupt.interrupted();
-    save(!interrupted);
-    if (interrupted) {
-      std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", all.size(),
-                   o->json.empty() ? "" : " in ", o->json.c_str());
-      return kExitInterrupted;
-    }
-    return 0;
-  };
+  return [o, cmd]() { return run_bench_command(*o, *cmd); };
 }
+
+namespace {
+
+int run_bench_command(BenchCli& o, const CLI::App& cmd) {
+  apply_preset(o, cmd);
+  const std::vector<std::string> specs = accel_specs_of(o);
+  const std::vector<std::string> scene_specs = scene_specs_of(o);
+  std::vector<RaySet> file_sets;
+  if (!o.ray_file.empty()) {
+    if (scene_specs.size() != 1)
+      throw std::invalid_argument("--ray-file: give exactly one scene (the scene the rays were made for)");
+    if (cmd.count("--ray-sets")) throw std::invalid_argument("--ray-file replaces --ray-sets: give one of them");
+    file_sets.push_back(read_ray_file(o.ray_file).set);
+  }
+
+  if (o.selfcheck) return run_embree_selfcheck(o, scene_specs, file_sets);
+
+  BenchOptions bo;
+  bo.ray_sets = parse_name_list(o.ray_sets);
+  bo.threads = parse_thread_list(o.threads);
+  std::tie(bo.width, bo.height) = parse_size(o.size);
+  bo.random_rays = o.random_rays;
+  bo.repeats = o.repeats;
+  bo.build_repeats = o.build_repeats;
+  bo.brute_max_triangles = o.brute_max_tris;
+  bo.seed = o.seed;
+  bo.memory_headroom = o.memory_headroom;
+  bo.given_sets = file_sets;
+  if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
+  const std::string csv = !o.csv.empty() ? o.csv : (o.json.empty() ? std::string() : csv_path_for(o.json));
+
+  nlohmann::json header = report_header("bench");
+  header["preset"] = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
+  header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
+                       {"threads", bo.threads},     {"size", o.size},         {"random_rays", bo.random_rays},
+                       {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
+                       {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
+                       {"ray_file", o.ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.ray_file)}};
+  std::vector<BenchRecord> all;
+  std::vector<BenchSkip> skipped;
+  auto save = [&](bool complete) {
+    if (!o.json.empty()) {
+      nlohmann::json recs = nlohmann::json::array();
+      for (const auto& r : all) recs.push_back(r.to_json());
+      nlohmann::json h = header;
+      h["complete"] = complete;
+      h["skipped"] = nlohmann::json::array();
+      for (const auto& s : skipped) h["skipped"].push_back(s.to_json());
+      write_json_report(o.json, h, recs);
+    }
+    if (!csv.empty()) write_file_atomically(csv, bench_csv(all));
+  };
+
+  const bool show = !o.quiet;
+  const bool tty = show && isatty(fileno(stderr));
+  InterruptGuard interrupt;  // Ctrl-C: finish the current cell, keep the records
+  bo.stop = interrupt.flag();
+  size_t done_scenes = 0;
+  for (const auto& spec : scene_specs) {
+    if (interrupt.interrupted()) break;
+    if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
+    const Scene scene = load_scene(spec);
+    const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
+    const size_t cells = cell_specs.size() * bo.ray_sets.size() * bo.threads.size();
+    if (show && cell_specs.size() < specs.size())
+      std::fprintf(stderr, "%sbench: %s: brute skipped (%zu triangles > --brute-max-tris %zu)\n", tty ? "\r\033[K" : "",
+                   scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
+    size_t done = 0;
+    BenchProgress progress;
+    const auto scene_start = std::chrono::steady_clock::now();
+    if (tty)
+      progress = [&](const std::string& m) {
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_start).count();
+        const std::string eta =
+            done > 0 && cells > done ? fmt::format(", ~{} left in this scene", format_duration(elapsed / done * (cells - done)))
+                                     : std::string();
+        std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu, %s%s] %s", done_scenes + 1, scene_specs.size(),
+                     done + 1, cells, format_duration(elapsed).c_str(), eta.c_str(), m.c_str());
+        std::fflush(stderr);
+      };
+    std::set<std::string> noted;
+    const size_t primary_rays = static_cast<size_t>(bo.width) * bo.height;
+    const auto records = run_bench(scene, specs, bo, progress, [&](const BenchRecord& r) {
+      ++done;
+      all.push_back(r);
+      save(false);
+      const size_t asked = r.ray_set == "random" ? bo.random_rays : primary_rays;
+      if (show && r.rays != asked && noted.insert(r.ray_set).second)
+        std::fprintf(stderr, "%s%s: %s", tty ? "\r\033[K" : "", r.scene.c_str(),
+                     ray_set_size_note(r.ray_set, asked, r.rays).c_str());
+      if (show && !tty)
+        std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
+                     done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
+                     r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
+    }, [&](const BenchSkip& skip) {
+      skipped.push_back(skip);
+      save(false);
+      std::printf("bench %s: %s skipped: %s\n", skip.scene.c_str(), skip.accel.c_str(), skip.reason.c_str());
+    });
+    // The returned records carry the best-Embree figures of the whole run.
+    if (all.size() >= records.size()) {
+      std::copy(records.begin(), records.end(), all.end() - static_cast<std::ptrdiff_t>(records.size()));
+      save(false);
+    }
+    if (tty) std::fprintf(stderr, "\r\033[K");
+    std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
+                format_bench_table(records).c_str());
+    std::printf("%s", format_build_summary(records).c_str());
+    std::fflush(stdout);
+    ++done_scenes;
+  }
+  const bool interrupted = interrupt.interrupted();
+  save(!interrupted);
+  if (interrupted) {
+    std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", all.size(),
+                 o.json.empty() ? "" : " in ", o.json.c_str());
+    return kExitInterrupted;
+  }
+  return 0;
+}
+
+}  // namespace
 
 }  // namespace raylab::cli

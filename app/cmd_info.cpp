@@ -56,8 +56,7 @@ Runner add_info(CLI::App& app) {
   auto accel_list = std::make_shared<std::string>();
   auto repeats = std::make_shared<int>(1);
   CLI::App* cmd = app.add_subcommand("info", "print a scene's triangle count, bounds and load time");
-  cmd->add_option("scene", *positional, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
-  cmd->add_option("--scene", *scene_spec, "the scene, as the positional argument");
+  add_scene_options(cmd, *positional, *scene_spec, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
   cmd->add_option("--accel", *accel_list, "also build these accelerators and print their build figures");
   cmd->add_option("--build-repeats", *repeats, "builds per accelerator (median reported)")->check(CLI::Range(1, 100));
   return [scene_spec, positional, accel_list, repeats]() {
@@ -106,6 +105,7 @@ static nlohmann::json accelerators_json() {
     j["stats"] = nlohmann::json::array();
     for (const auto& st : info.stats) j["stats"].push_back({{"key", st.key}, {"help", st.help}});
     j["cover"] = info.cover;
+    j["build_peak_bytes_per_triangle"] = info.build_peak_bytes_per_triangle;
     const Capabilities& c = info.caps;
     j["capabilities"] = {{"mt_variant", c.mt_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.mt_variant)},
                          {"robust_variant", c.robust_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.robust_variant)},

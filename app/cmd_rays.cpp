@@ -27,8 +27,7 @@ Runner add_rays(CLI::App& app) {
   // The vocabulary of verify and bench (issue 19): a positional scene,
   // --ray-sets for which set, --rays for how many, -o for the output; the
   // first names (--set, --count, --out) are kept as synonyms.
-  cmd->add_option("scene", o->positional_scene, "the scene: procedural spec, scene file or mesh file");
-  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
+  add_scene_options(cmd, o->positional_scene, o->scene, "the scene: procedural spec, scene file or mesh file");
   cmd->add_option("--ray-sets,--set", o->set, "the ray set: primary, diffuse, shadow or random (one)")->required();
   cmd->add_option("--size", o->size, "primary rays (and the diffuse/shadow rays from their hits): image size WIDTHxHEIGHT")
       ->capture_default_str();
@@ -40,9 +39,7 @@ Runner add_rays(CLI::App& app) {
   return [o]() {
     if (o->set.find(',') != std::string::npos)
       throw std::invalid_argument(fmt::format("rays writes one ray set per file, '{}' names several", o->set));
-    bool known = false;
-    for (const auto& k : ray_set_names()) known |= k == o->set;
-    if (!known) throw std::invalid_argument(fmt::format("unknown ray set '{}' (available: primary, diffuse, shadow, random)", o->set));
+    check_ray_set_names({o->set});
     RaySetOptions rso;
     std::tie(rso.width, rso.height) = parse_size(o->size);
     rso.random_count = o->count;

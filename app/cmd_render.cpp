@@ -46,9 +46,8 @@ Runner add_render(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("render", "path-trace a scene to PNG, EXR or PFM");
-  cmd->add_option("scene", o->positional_scene,
-                  "the scene: procedural spec, mesh file or JSON scene file (default cornell; see raylab scenes)");
-  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
+  add_scene_options(cmd, o->positional_scene, o->scene,
+                    "the scene: procedural spec, mesh file or JSON scene file (default cornell; see raylab scenes)");
   cmd->add_option("--accel", o->accel, "one accelerator spec (see raylab accels)")->capture_default_str();
   cmd->add_option("-s,--spp", o->spp, "samples per pixel")->capture_default_str()->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--size", o->size, "image size WIDTHxHEIGHT (default: the scene's view)");

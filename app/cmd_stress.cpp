@@ -117,17 +117,7 @@ Runner add_stress(CLI::App& app) {
       recs.push_back(stress_record_json(r));
     }
     progress.clear();
-    const bool interrupted = interrupt.interrupted();
-    if (!o->json.empty()) {
-      nlohmann::json header = report_header("stress");
-      header["complete"] = !interrupted;
-      write_json_report(o->json, header, recs);
-    }
-    if (interrupted) {
-      std::fprintf(stderr, "raylab stress: interrupted: %zu finished records kept%s%s\n", records.size(),
-                   o->json.empty() ? "" : " in ", o->json.c_str());
-      return kExitInterrupted;
-    }
+    if (const int rc = write_check_report("stress", o->json, recs, interrupt.interrupted())) return rc;
     std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
                 records.size(), n_failed);
     return failed ? kExitCheckFailed : 0;

@@ -22,15 +22,6 @@ nlohmann::json verify_record_json(const VerifyRecord& r) {
   return j;
 }
 
-// Ray sets built from primary hits (diffuse, shadow) hold one ray per hit,
-// so fewer than asked when rays miss: say so instead of silently tracing less.
-std::string ray_set_size_note(const std::string& set, size_t asked, size_t got) {
-  if (got == asked) return {};
-  const bool secondary = set == "diffuse" || set == "shadow";
-  return fmt::format("note: ray set '{}' holds {} rays, not {}{}\n", set, got, asked,
-                     secondary ? " (its rays start from primary hits; primary rays that miss give none)" : "");
-}
-
 Runner add_verify(CLI::App& app) {
   struct Opts {
     std::string scene, positional_scene, accel = "bvh,brute", ray_sets = "primary,random", json;
@@ -41,8 +32,8 @@ Runner add_verify(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("verify", "compare accelerators' hits with Embree (robust) on the same rays");
-  cmd->add_option("scene", o->positional_scene, "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
-  cmd->add_option("--scene", o->scene, "the scene, as the positional argument");
+  add_scene_options(cmd, o->positional_scene, o->scene,
+                    "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
   cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
   add_ray_count_option(cmd, o->rays, "rays per ray set");
   cmd->add_option("--ray-sets", o->ray_sets, "ray sets, comma separated: primary, random, diffuse, shadow")->capture_default_str();
@@ -58,9 +49,7 @@ Runner add_verify(CLI::App& app) {
     vo.seed = o->seed;
     vo.threads = o->threads;
     vo.ray_sets = parse_name_list(o->ray_sets);
-    for (const auto& name : vo.ray_sets)  // before loading a possibly large scene
-      if (std::find(ray_set_names().begin(), ray_set_names().end(), name) == ray_set_names().end())
-        throw std::invalid_argument(fmt::format("unknown ray set '{}' (ray sets: primary, random, diffuse, shadow)", name));
+    check_ray_set_names(vo.ray_sets);  // before loading a possibly large scene
     const Scene scene = load_scene(pick_scene("verify", o->scene, o->positional_scene, "cornell"));
     InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
     std::printf("verify %s (%zu triangle%s) against %s\n", scene.name.c_str(), scene.num_triangles(),
@@ -86,17 +75,7 @@ Runner add_verify(CLI::App& app) {
       recs.push_back(verify_record_json(r));
       if (noted.insert(r.ray_set).second) std::fputs(ray_set_size_note(r.ray_set, o->rays, r.rays).c_str(), stderr);
     }
-    const bool interrupted = interrupt.interrupted();
-    if (!o->json.empty()) {
-      nlohmann::json header = report_header("verify");
-      header["complete"] = !interrupted;
-      write_json_report(o->json, header, recs);
-    }
-    if (interrupted) {
-      std::fprintf(stderr, "raylab verify: interrupted: %zu finished records kept%s%s\n", records.size(),
-                   o->json.empty() ? "" : " in ", o->json.c_str());
-      return kExitInterrupted;
-    }
+    if (const int rc = write_check_report("verify", o->json, recs, interrupt.interrupted())) return rc;
     return failed ? kExitCheckFailed : 0;
   };
 }

@@ -47,6 +47,10 @@ std::vector<std::string> parse_name_list(const std::string& text);
 std::string pick_scene(const std::string& command, const std::string& option, const std::string& positional,
                        const std::string& fallback);
 
+// Adds the positional "scene" (described by `help`) and "--scene", its
+// synonym; pick_scene() then chooses.
+void add_scene_options(CLI::App* cmd, std::string& positional, std::string& option, const std::string& help);
+
 // Adds "-t,--threads" taking one count; 0 (the default) = all cores.
 CLI::Option* add_threads_option(CLI::App* cmd, int& threads);
 
@@ -54,6 +58,11 @@ CLI::Option* add_threads_option(CLI::App* cmd, int& threads);
 // message pointing to --ray-sets instead of CLI11's range error.
 CLI::Option* add_ray_count_option(CLI::App* cmd, size_t& rays, const std::string& help,
                                   const std::string& names = "--rays");
+
+// Ray sets built from primary hits (diffuse, shadow) hold one ray per hit,
+// so fewer than asked when rays miss: the note saying so (empty when the set
+// holds what was asked; one line ending in a newline otherwise).
+std::string ray_set_size_note(const std::string& set, size_t asked, size_t got);
 
 // "1,0,4" -> thread counts with 0 replaced by all cores (de-duplicated, in order).
 std::vector<int> parse_thread_list(const std::string& text);

@@ -16,18 +16,6 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-std::vector<std::string> split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  size_t start = 0;
-  while (true) {
-    const auto pos = s.find(sep, start);
-    out.push_back(s.substr(start, pos == std::string::npos ? std::string::npos : pos - start));
-    if (pos == std::string::npos) break;
-    start = pos + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 Spec Spec::parse(const std::string& text) {
@@ -38,7 +26,7 @@ Spec Spec::parse(const std::string& text) {
   if (colon == std::string::npos) return spec;
   const std::string rest = text.substr(colon + 1);
   if (trim(rest).empty()) return spec;
-  for (const auto& item : split(rest, ',')) {
+  for (const auto& item : split_at(rest, ',')) {
     const auto eq = item.find('=');
     if (eq == std::string::npos)
       throw SpecError(fmt::format("parameter '{}' in spec '{}' is not of the form key=value", trim(item), text));
@@ -65,8 +53,8 @@ std::string Spec::to_string() const {
 
 std::vector<std::string> split_spec_list(const std::string& text) {
   std::vector<std::string> out;
-  for (const auto& group : split(text, ';')) {
-    for (const auto& raw : split(group, ',')) {
+  for (const auto& group : split_at(text, ';')) {
+    for (const auto& raw : split_at(group, ',')) {
       const std::string tok = trim(raw);
       if (tok.empty()) continue;
       const bool continues = tok.find('=') != std::string::npos && tok.find(':') == std::string::npos;
@@ -133,6 +121,17 @@ const std::string& Params::choice(const std::string& key, const std::vector<std:
   std::string list;
   for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
   throw SpecError(fmt::format("parameter {}={} of '{}' must be one of: {}", key, s, owner_, list));
+}
+
+std::vector<std::string> split_at(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (true) {
+    const auto pos = text.find(sep, start);
+    out.push_back(text.substr(start, pos == std::string::npos ? std::string::npos : pos - start));
+    if (pos == std::string::npos) return out;
+    start = pos + 1;
+  }
 }
 
 }  // namespace raylab

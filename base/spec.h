@@ -26,6 +26,10 @@ struct Spec {
 // spec's parameters. ';' always separates specs.
 std::vector<std::string> split_spec_list(const std::string& text);
 
+// The pieces of `text` between separators, empty ones included ("a,,b" ->
+// "a", "", "b"; "" -> one empty piece).
+std::vector<std::string> split_at(const std::string& text, char sep);
+
 // Declared parameter of a spec: name, default value and a one-line help.
 struct ParamInfo {
   std::string name;

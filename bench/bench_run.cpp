@@ -18,39 +18,25 @@
 
 namespace raylab {
 
+// The fields written under their own names (docs/json-reports.md); to_json
+// adds the derived and the possibly-null ones.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BenchRecord, scene, triangles, accel, ray_set, threads, rays, build_ms, bytes,
+                                   mrays_per_s, mrays_min, mrays_max, prepare_ms, embree_mrays_per_s, ratio_to_embree,
+                                   best_embree, best_embree_mrays_per_s, ratio_to_best_embree, embree_agreement, trace_s,
+                                   extra, rss_before_build_bytes, rss_peak_bytes)
+
 nlohmann::json BenchRecord::to_json() const {
-  nlohmann::json j;
-  j["scene"] = scene;
-  j["triangles"] = triangles;
-  j["accel"] = accel;
-  j["ray_set"] = ray_set;
-  j["threads"] = threads;
-  j["rays"] = rays;
-  j["build_ms"] = build_ms;
-  j["bytes"] = bytes;
+  nlohmann::json j = *this;
   j["bytes_per_triangle"] = triangles ? static_cast<double>(bytes) / triangles : 0.0;
-  j["mrays_per_s"] = mrays_per_s;
-  j["mrays_min"] = mrays_min;
-  j["mrays_max"] = mrays_max;
-  j["prepare_ms"] = prepare_ms;
-  j["embree_mrays_per_s"] = embree_mrays_per_s;
-  j["ratio_to_embree"] = ratio_to_embree;
-  j["best_embree"] = best_embree;
-  j["best_embree_mrays_per_s"] = best_embree_mrays_per_s;
-  j["ratio_to_best_embree"] = ratio_to_best_embree;
-  j["embree_agreement"] = embree_agreement;
-  // null where a figure does not apply (docs/json-reports.md).
+  // null where a figure does not apply.
   auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  auto tree_figure_or_null = [this](auto v) { return has_tree ? nlohmann::json(v) : nlohmann::json(nullptr); };
   j["nodes_per_ray"] = number_or_null(nodes_per_ray);
   j["tris_per_ray"] = number_or_null(tris_per_ray);
   j["sah_cost"] = number_or_null(sah_cost);
-  j["nodes"] = has_tree ? nlohmann::json(nodes) : nlohmann::json(nullptr);
-  j["leaves"] = has_tree ? nlohmann::json(leaves) : nlohmann::json(nullptr);
-  j["max_depth"] = has_tree ? nlohmann::json(max_depth) : nlohmann::json(nullptr);
-  j["trace_s"] = trace_s;
-  j["extra"] = extra;
-  j["rss_before_build_bytes"] = rss_before_build_bytes;
-  j["rss_peak_bytes"] = rss_peak_bytes;
+  j["nodes"] = tree_figure_or_null(nodes);
+  j["leaves"] = tree_figure_or_null(leaves);
+  j["max_depth"] = tree_figure_or_null(max_depth);
   return j;
 }
 

@@ -1,23 +1,21 @@
 #include "bench/memory_estimate.h"
 
 #include <algorithm>
-#include <map>
+
+#include "accel/registry.h"
 
 namespace raylab {
 
 double build_peak_bytes_per_triangle(const std::string& accel_spec) {
-  // Peak resident bytes per triangle above the loaded scene, measured on
-  // soup:n=10^7 with the default parameters (embree 130, bvh 164, grid 68,
-  // hashgrid 131, grid2 145), rounded up. kdtree and brute (40-byte leaf triangles): not measured at
-  // 10^7 (build time), conservative figures from their layouts.
-  static const std::map<std::string, double> kPerTriangle = {
-      {"embree", 135}, {"brute", 45}, {"bvh", 170}, {"kdtree", 300}, {"grid", 75}, {"hashgrid", 140}, {"grid2", 150},
-  };
-  const std::string family = accel_spec.substr(0, accel_spec.find(':'));
-  const auto it = kPerTriangle.find(family);
-  if (it != kPerTriangle.end()) return it->second;
+  // Each structure declares its figure in its registry line
+  // (AcceleratorInfo::build_peak_bytes_per_triangle); undeclared or unknown
+  // structures get the largest declared one.
+  const std::string name = accel_spec.substr(0, accel_spec.find(':'));
   double largest = 0;
-  for (const auto& [name, bytes] : kPerTriangle) largest = std::max(largest, bytes);
+  for (const AcceleratorInfo& info : accelerator_registry()) {
+    if (info.name == name && info.build_peak_bytes_per_triangle > 0) return info.build_peak_bytes_per_triangle;
+    largest = std::max(largest, info.build_peak_bytes_per_triangle);
+  }
   return largest;
 }
 

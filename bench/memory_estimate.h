@@ -2,16 +2,16 @@
 // How much memory building a structure needs, estimated before building it,
 // so `raylab bench` can skip what does not fit with a reason ("needs ~31 GiB
 // by its estimate") instead of being killed by the kernel. The figures are
-// peak resident bytes per triangle above the loaded scene, measured with
-// `raylab bench --scene soup:n=10000000 --accel X` (rss_peak_bytes -
-// rss_before_build_bytes of its records) and rounded up; README "Big scenes".
+// peak resident bytes per triangle above the loaded scene, declared by each
+// structure in its registry line (AcceleratorInfo::build_peak_bytes_per_triangle,
+// accel/registry.h); README "Big scenes".
 #include <cstddef>
 #include <string>
 
 namespace raylab {
 
-// Peak bytes per triangle of building and holding `accel_spec` (its family's
-// figure; unknown families get the largest).
+// Peak bytes per triangle of building and holding `accel_spec` (its
+// structure's declared figure; undeclared or unknown ones get the largest).
 double build_peak_bytes_per_triangle(const std::string& accel_spec);
 
 // build_peak_bytes_per_triangle x triangles, plus a fixed allowance for the

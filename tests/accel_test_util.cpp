@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -136,6 +137,44 @@ std::vector<Ray> surface_rays(const TriangleMesh& mesh, std::span<const Ray> ray
     out.emplace_back(Vec3f(p + offset * n), w);
   }
   return out;
+}
+
+std::vector<std::string> specs_checked_against_brute() {
+  std::vector<std::string> specs;
+  for (const auto& spec : coverage_specs()) {
+    const std::string name = Spec::parse(spec).name;
+    if (accelerator_info(name).caps.reference || name == "brute" || spec.find("tri=mt") != std::string::npos) continue;
+    specs.push_back(spec);
+  }
+  return specs;
+}
+
+std::string gtest_name(const std::string& spec) {
+  std::string s = spec;
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return s;
+}
+
+size_t closed_sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, size_t remove) {
+  TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
+  const TriangleMesh full = sphere;
+  if (remove < sphere.num_triangles()) sphere.triangles.erase(sphere.triangles.begin() + remove);
+  auto accel = make_accelerator(spec);
+  accel->build(sphere);
+  Pcg32 rng(42, 3);
+  std::vector<Ray> batch;
+  for (size_t i = 0; i < rays; ++i) {
+    batch.push_back(ray_at_shared_edge(full, center, i, rng));  // targets on the complete sphere
+    batch.emplace_back(center, random_direction(rng));
+  }
+  std::vector<Hit> hits(batch.size());
+  std::vector<uint8_t> occ(batch.size());
+  accel->intersect(batch, hits);
+  accel->occluded(batch, occ);
+  size_t leaks = 0;
+  for (size_t i = 0; i < batch.size(); ++i) leaks += !hits[i].valid() + !occ[i];
+  return leaks;
 }
 
 BruteReference brute_reference(const TriangleMesh& mesh, std::span<const Ray> rays) {

@@ -54,6 +54,19 @@ std::vector<Ray> segment_rays(const TriangleMesh& mesh, size_t count, uint64_t s
 std::vector<Ray> surface_rays(const TriangleMesh& mesh, std::span<const Ray> rays, std::span<const Hit> hits,
                               uint64_t seed);
 
+// Every spec the registry asks to cover, except the reference (Embree),
+// brute force itself (the ground truth) and Moller-Trumbore variants (a
+// different test may pick the other triangle at a shared edge).
+std::vector<std::string> specs_checked_against_brute();
+// A spec as a gtest parameter name ("bvh:layout=bvh2" -> "bvh_layout_bvh2").
+std::string gtest_name(const std::string& spec);
+
+// Rays from outside a closed UV sphere (48 x 24) aimed at its shared edges
+// and vertices, and rays from its centre: how many of them miss (closest
+// hit) or are not occluded, with triangle `remove` taken out (a hole) when
+// it is a valid index.
+size_t closed_sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, size_t remove = SIZE_MAX);
+
 // Closest hits and occlusion answers of the brute-force structure.
 struct BruteReference {
   std::vector<Hit> hits;

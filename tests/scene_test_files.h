@@ -21,14 +21,20 @@ inline std::string write_file(const std::filesystem::path& dir, const std::strin
   return p.string();
 }
 
-// Message of the SceneLoadError thrown by load_mesh_file (empty if none).
-inline std::string load_error(const std::string& path) {
+// Message of the SceneLoadError `load` throws (empty if none).
+template <class Load>
+std::string load_error_of(Load load) {
   try {
-    load_mesh_file(path);
+    load();
   } catch (const SceneLoadError& e) {
     return e.what();
   }
   return "";
+}
+
+// Message of the SceneLoadError thrown by load_mesh_file (empty if none).
+inline std::string load_error(const std::string& path) {
+  return load_error_of([&] { load_mesh_file(path); });
 }
 
 template <class T>

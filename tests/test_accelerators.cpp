@@ -15,26 +15,6 @@
 namespace raylab {
 namespace {
 
-// Every spec the registry asks to cover, except the reference (Embree, tested
-// below), brute force itself (the ground truth here) and Moller-Trumbore
-// variants (a different test may pick the other triangle at a shared edge).
-std::vector<std::string> tested_accelerators() {
-  std::vector<std::string> specs;
-  for (const auto& spec : coverage_specs()) {
-    const std::string name = Spec::parse(spec).name;
-    if (accelerator_info(name).caps.reference || name == "brute" || spec.find("tri=mt") != std::string::npos) continue;
-    specs.push_back(spec);
-  }
-  return specs;
-}
-
-std::string test_name(const std::string& spec) {
-  std::string s = spec;
-  for (char& c : s)
-    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-  return s;
-}
-
 class EveryAccelerator : public ::testing::TestWithParam<std::string> {};
 
 // Compares closest hits with brute force: same hit/miss, and the same
@@ -136,8 +116,8 @@ TEST_P(EveryAccelerator, CountersAreFilledByTheInstrumentedKernel) {
   EXPECT_GT(stats.triangle_tests, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, EveryAccelerator, ::testing::ValuesIn(tested_accelerators()),
-                         [](const auto& info) { return test_name(info.param); });
+INSTANTIATE_TEST_SUITE_P(Registry, EveryAccelerator, ::testing::ValuesIn(test::specs_checked_against_brute()),
+                         [](const auto& info) { return test::gtest_name(info.param); });
 
 TEST(Accelerator, BuildsOnceAndTracesNothingBefore) {
   const TriangleMesh mesh = triangle_soup_mesh(100, 4);
@@ -165,6 +145,15 @@ TEST(Registry, EveryStatisticIsDeclared) {
       EXPECT_TRUE(declared) << spec << " reports '" << key << "' without declaring it";
     }
     for (const auto& d : info.stats) EXPECT_FALSE(d.help.empty()) << spec << " " << d.key;
+  }
+}
+
+TEST(Registry, EveryStructureDeclaresItsBuildMemory) {
+  // bench's memory estimate has no list of its own: each registry line
+  // declares its peak bytes per triangle (accel/registry.h).
+  for (const auto& info : accelerator_registry()) {
+    EXPECT_GT(info.build_peak_bytes_per_triangle, 0.0) << info.name;
+    EXPECT_LT(info.build_peak_bytes_per_triangle, 10'000.0) << info.name;
   }
 }
 

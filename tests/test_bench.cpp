@@ -21,6 +21,7 @@
 
 #include "bench/bench_run.h"
 #include "scenes/scene_registry.h"
+#include "tests/report_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -28,18 +29,8 @@ namespace {
 
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
-
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
-
-std::vector<std::string> read_lines(const fs::path& p) {
-  std::ifstream in(p);
-  std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
+using test::read_json;
+using test::read_lines;
 
 // One tiny run shared by the schema and consistency tests.
 class TinyBench : public ::testing::Test {
@@ -183,32 +174,25 @@ TEST_F(TinyBench, PlotScriptWritesThePngs) {
 }
 
 TEST(Bench, ScaleAndSeveralScenes) {
-  const auto dir = test::temp_dir("bench_scale");
-  const auto json = dir / "s.json";
-  const auto r = test::run_raylab("bench --scale soup:n=100,400 --scene cornell --accel embree,bvh --ray-sets random "
-                                  "--rays 500 --repeats 1 --threads 1 --quiet --json " + json.string());
+  const auto [r, j] = test::run_raylab_json("bench_scale", "bench --scale soup:n=100,400 --scene cornell --accel "
+                                            "embree,bvh --ray-sets random --rays 500 --repeats 1 --threads 1 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto j = read_json(json);
   std::multiset<size_t> tris;
   for (const auto& rec : j["records"]) tris.insert(rec["triangles"].get<size_t>());
   EXPECT_EQ(tris, (std::multiset<size_t>{32, 32, 100, 100, 400, 400}));
   EXPECT_EQ(j["options"]["scenes"], nlohmann::json({"cornell", "soup:n=100", "soup:n=400"}));
-  fs::remove_all(dir);
 }
 
 TEST(Bench, BruteIsSkippedAboveItsTriangleLimit) {
-  const auto dir = test::temp_dir("bench_brute");
-  const auto json = dir / "b.json";
-  const auto r = test::run_raylab("bench --scene soup:n=50 --scene soup:n=200 --accel brute,bvh --ray-sets random "
-                                  "--rays 300 --repeats 1 --threads 1 --brute-max-tris 100 --json " + json.string());
+  const auto [r, j] = test::run_raylab_json("bench_brute", "bench --scene soup:n=50 --scene soup:n=200 --accel "
+                                            "brute,bvh --ray-sets random --rays 300 --repeats 1 --threads 1 "
+                                            "--brute-max-tris 100");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("brute skipped"));
   std::multiset<std::string> cells;
-  const auto j = read_json(json);
   for (const auto& rec : j["records"])
     cells.insert(rec["accel"].get<std::string>() + "@" + std::to_string(rec["triangles"].get<int>()));
   EXPECT_EQ(cells, (std::multiset<std::string>{"brute@50", "bvh@50", "bvh@200"}));
-  fs::remove_all(dir);
 }
 
 TEST(Bench, BadPresetsAndOptionsExitWith2) {

@@ -14,6 +14,7 @@
 #include "bench/memory_estimate.h"
 #include "bench/process_memory.h"
 #include "scenes/scene_registry.h"
+#include "tests/report_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -107,19 +108,14 @@ TEST(BenchMemory, BuildFailureIsASkipAndTheMatrixGoesOn) {
 
 // The same through the command line: exit 0, the skips in the JSON.
 TEST(BenchMemory, CommandLineWritesSkipsToTheJson) {
-  const auto dir = test::temp_dir("bench_memory_skip");
-  const auto json = dir / "s.json";
-  const auto r = test::run_raylab("bench --scene soup:n=500 --accel bvh --ray-sets random --rays 100 --repeats 1 "
-                                  "--threads 1 --memory-headroom 0.000000000001 --json " + json.string());
+  const auto [r, j] = test::run_raylab_json("bench_memory_skip", "bench --scene soup:n=500 --accel bvh --ray-sets "
+                                            "random --rays 100 --repeats 1 --threads 1 --memory-headroom 0.000000000001");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("bvh skipped: the Embree reference needs ~"));
-  std::ifstream in(json);
-  const auto j = nlohmann::json::parse(in);
   EXPECT_TRUE(j.at("records").empty());
   ASSERT_EQ(j.at("skipped").size(), 1u);
   EXPECT_EQ(j.at("skipped")[0].at("accel"), "bvh");
   EXPECT_THAT(j.at("skipped")[0].at("reason").get<std::string>(), HasSubstr("by its estimate"));
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -633,40 +633,17 @@ TEST(BvhTriangleBlock, PaddingLanesRepeatTheFirstTriangle) {
   for (int lane = 2; lane < 8; ++lane) EXPECT_EQ(blk.prim[lane], 4u);
 }
 
-// Rays from outside aimed at shared edges and vertices of a closed sphere
-// must hit it, and rays from inside must never escape.
-size_t sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, size_t remove = SIZE_MAX) {
-  TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
-  const TriangleMesh full = sphere;
-  if (remove < sphere.num_triangles()) sphere.triangles.erase(sphere.triangles.begin() + remove);
-  auto accel = make_accelerator(spec);
-  accel->build(sphere);
-  Pcg32 rng(42, 3);
-  std::vector<Ray> batch;
-  for (size_t i = 0; i < rays; ++i) {
-    batch.push_back(test::ray_at_shared_edge(full, center, i, rng));
-    batch.emplace_back(center, test::random_direction(rng));
-  }
-  std::vector<Hit> hits(batch.size());
-  std::vector<uint8_t> occ(batch.size());
-  accel->intersect(batch, hits);
-  accel->occluded(batch, occ);
-  size_t leaks = 0;
-  for (size_t i = 0; i < batch.size(); ++i) leaks += !hits[i].valid() + !occ[i];
-  return leaks;
-}
-
 TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
   for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
                            "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1"}) {
-    EXPECT_EQ(sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
+    EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the radius.
-    EXPECT_EQ(sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
+    EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
   }
 }
 
 TEST(BvhWatertightness, LeakCounterFindsAHole) {
-  EXPECT_GT(sphere_leaks("bvh", Vec3f::Zero(), 20000, 700), 0u);
+  EXPECT_GT(test::closed_sphere_leaks("bvh", Vec3f::Zero(), 20000, 700), 0u);
 }
 
 TEST(BvhTraversal, SortingNetworkSortsDescending) {

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/scene_test_files.h"
+#include "tests/report_test_util.h"
 #include "tests/test_util.h"
 #include "tracer/image.h"
 
@@ -26,11 +27,8 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 namespace fs = std::filesystem;
-
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
+using test::read_json;
+using test::read_lines;
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 

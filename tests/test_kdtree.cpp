@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <thread>
 
@@ -119,6 +120,19 @@ std::vector<Ray> mixed_rays(const TriangleMesh& mesh, size_t count, uint64_t see
   return rays;
 }
 
+// Every k-d tree variant of kKdSpecs agrees with brute force on these rays;
+// `also(spec, built)` checks more on each.
+void expect_kd_specs_agree(const TriangleMesh& mesh, std::span<const Ray> rays,
+                           const std::function<void(const std::string&, const Built&)>& also = {}) {
+  const Reference ref = brute_force(mesh, rays);
+  for (const char* spec : kKdSpecs) {
+    const Built kd = build(spec, mesh);
+    std::string first;
+    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+    if (also) also(spec, kd);
+  }
+}
+
 struct CellInfo {
   uint32_t node;
   Aabb cell;
@@ -208,28 +222,18 @@ TEST(KdTree, MatchesBruteForceOnRandomSoups) {
 
 TEST(KdTree, ThousandCopiesOfOneTriangle) {
   TriangleMesh mesh = triangle_copies_mesh(1000);
-  const auto rays = mixed_rays(mesh, 4000, 4);
-  const Reference ref = brute_force(mesh, rays);
-  for (const char* spec : kKdSpecs) {
-    const Built kd = build(spec, mesh);
-    std::string first;
-    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
+  expect_kd_specs_agree(mesh, mixed_rays(mesh, 4000, 4), [](const std::string& spec, const Built& kd) {
     // Nothing separates identical triangles: no subdivision, no copies.
     EXPECT_LE(kd.stats.max_depth, 2) << spec;
     EXPECT_LE(kd.stats.nodes, 9u) << spec;
     EXPECT_DOUBLE_EQ(kd.stats.extra.at("refs_per_triangle"), 1.0) << spec;
-  }
+  });
   // Next to other geometry the copies are cut off into one leaf.
   mesh.append(triangle_soup_mesh(1000, 5));
-  const auto rays2 = mixed_rays(mesh, 4000, 6);
-  const Reference ref2 = brute_force(mesh, rays2);
-  for (const char* spec : kKdSpecs) {
-    const Built kd = build(spec, mesh);
-    std::string first;
-    EXPECT_EQ(count_mismatches(*kd.accel, ref2, rays2, &first), 0u) << spec << ": " << first;
+  expect_kd_specs_agree(mesh, mixed_rays(mesh, 4000, 6), [](const std::string& spec, const Built& kd) {
     EXPECT_LE(kd.stats.extra.at("refs_per_triangle"), 8.0) << spec;
     EXPECT_GE(kd.stats.extra.at("max_leaf_size"), 1000.0) << spec;
-  }
+  });
 }
 
 TEST(KdTree, AllCoplanarAxisAlignedScene) {
@@ -290,12 +294,7 @@ TEST(KdTree, PlanarTrianglesInsideAVolumeGetTheirOwnFlatCells) {
     rays.emplace_back(p - d, d);
     rays.emplace_back(p - Vec3f(0.0f, d.y(), d.z()), Vec3f((i % 2) ? 0.0f : -0.0f, d.y(), d.z()));
   }
-  const Reference ref = brute_force(mesh, rays);
-  for (const char* spec : kKdSpecs) {
-    const Built kd = build(spec, mesh);
-    std::string first;
-    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
-  }
+  expect_kd_specs_agree(mesh, rays);
 }
 
 TEST(KdTree, ClosedSphereHasNoLeaksNearAndFarFromTheOrigin) {
@@ -459,12 +458,7 @@ TEST(KdTreeTraversal, TminTmaxWindows) {
     rays.emplace_back(r.org + t * r.dir, r.dir, 0.0f, kInf);          // starting on the surface
   }
   ASSERT_GT(rays.size(), 6000u);
-  const Reference ref = brute_force(mesh, rays);
-  for (const char* spec : kKdSpecs) {
-    const Built kd = build(spec, mesh);
-    std::string first;
-    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
-  }
+  expect_kd_specs_agree(mesh, rays);
 }
 
 TEST(KdTreeTraversal, RaysStartingInsideOutsideAndMissingTheRootCell) {
@@ -493,12 +487,7 @@ TEST(KdTreeTraversal, RaysStartingInsideOutsideAndMissingTheRootCell) {
     beside[k] += (i % 2) ? -0.25f : 0.25f;
     rays.emplace_back(beside, along);
   }
-  const Reference ref = brute_force(mesh, rays);
-  for (const char* spec : kKdSpecs) {
-    const Built kd = build(spec, mesh);
-    std::string first;
-    EXPECT_EQ(count_mismatches(*kd.accel, ref, rays, &first), 0u) << spec << ": " << first;
-  }
+  expect_kd_specs_agree(mesh, rays);
   // A ray that misses the root cell returns a miss from every query.
   const Built kd = build("kdtree", mesh);
   const Ray away(box.center() + Vec3f(0, 2 * box.diagonal().y(), 0), Vec3f(0, 1, 0));

@@ -7,28 +7,15 @@
 
 #include "scenes/mesh_import.h"
 #include "scenes/scene_registry.h"
+#include "tests/scene_test_files.h"
 #include "tests/test_util.h"
 
 namespace raylab {
 namespace {
 
 using ::testing::HasSubstr;
-
-std::string write_file(const std::filesystem::path& dir, const std::string& name, const std::string& bytes) {
-  const auto p = dir / name;
-  std::ofstream(p, std::ios::binary) << bytes;
-  return p.string();
-}
-
-// Message of the SceneLoadError thrown by load_mesh_file (empty if none).
-std::string load_error(const std::string& path) {
-  try {
-    load_mesh_file(path);
-  } catch (const SceneLoadError& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::load_error;
+using test::write_file;
 
 const char* kCubeObj =
     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"

@@ -13,12 +13,15 @@
 #include "accel/registry.h"
 #include "bench/report.h"
 #include "scenes/scene_registry.h"
+#include "tests/report_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
 namespace {
 
 namespace fs = std::filesystem;
+using test::read_json;
+using test::read_lines;
 
 std::set<std::string> documented_keys() {
   std::ifstream in(std::string(RAYLAB_SOURCE_DIR) + "/docs/json-reports.md");
@@ -28,11 +31,6 @@ std::set<std::string> documented_keys() {
   for (auto it = std::sregex_iterator(text.begin(), text.end(), code); it != std::sregex_iterator(); ++it)
     keys.insert((*it)[1].str());
   return keys;
-}
-
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
 }
 
 TEST(ReportDocs, EveryReportHasTheSchemaVersionAndEveryKeyIsDocumented) {

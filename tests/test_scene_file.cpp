@@ -11,6 +11,7 @@
 #include "scenes/scene_registry.h"
 #include "tests/scene_test_files.h"
 #include "tests/test_util.h"
+#include "tests/tracer_test_util.h"
 #include "tracer/camera.h"
 
 namespace raylab {
@@ -19,12 +20,7 @@ namespace {
 using ::testing::HasSubstr;
 
 std::string scene_error(const std::string& path) {
-  try {
-    load_scene_file(path);
-  } catch (const SceneLoadError& e) {
-    return e.what();
-  }
-  return "";
+  return test::load_error_of([&] { load_scene_file(path); });
 }
 
 bool near(const Vec3f& a, const Vec3f& b, float tol = 1e-5f) { return (a - b).cwiseAbs().maxCoeff() <= tol; }
@@ -33,19 +29,10 @@ Vec3f triangle_normal(const Scene& s, size_t t) {
   return (s.mesh.vertex(t, 1) - s.mesh.vertex(t, 0)).cross(s.mesh.vertex(t, 2) - s.mesh.vertex(t, 0)).normalized();
 }
 
-// Fraction of a coarse grid of camera rays that hit the scene.
-double hit_fraction(const Scene& s, int n = 24) {
+double hit_fraction(const Scene& s) {
   auto accel = make_accelerator("bvh");
   accel->build(s.mesh);
-  View v = s.view;
-  v.width = v.height = n;
-  const PinholeCamera cam(v);
-  std::vector<Ray> rays;
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
-  std::vector<Hit> hits(rays.size());
-  accel->intersect(rays, hits);
-  return static_cast<double>(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); })) / hits.size();
+  return test::camera_hit_fraction(s, *accel);
 }
 
 TEST(SceneFile, TransformsApplyScaleThenRotateThenTranslate) {

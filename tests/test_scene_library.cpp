@@ -12,6 +12,7 @@
 #include "scenes/procedural.h"
 #include "scenes/scene_registry.h"
 #include "tests/test_util.h"
+#include "tests/tracer_test_util.h"
 #include "tracer/camera.h"
 #include "tracer/integrator.h"
 
@@ -19,18 +20,6 @@ namespace raylab {
 namespace {
 
 Scene make(const std::string& spec) { return load_scene(spec); }
-
-double hit_fraction(const Scene& s, const Accelerator& accel, int n = 24) {
-  View v = s.view;
-  v.width = v.height = n;
-  const PinholeCamera cam(v);
-  std::vector<Ray> rays;
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) rays.push_back(cam.generate(x + 0.5f, y + 0.5f));
-  std::vector<Hit> hits(rays.size());
-  accel.intersect(rays, hits);
-  return static_cast<double>(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.valid(); })) / hits.size();
-}
 
 // Small versions of each scene for speed; the defaults are checked by the
 // exact-size test and by `raylab render` in the README gallery.
@@ -49,7 +38,7 @@ TEST(SceneLibrary, EverySceneIsValidLitSeenAndRendersToASensibleImage) {
     EXPECT_TRUE(s.has_emitters() || s.background.maxCoeff() > 0.0f) << "no light";
     auto accel = make_accelerator("bvh");
     accel->build(s.mesh);
-    EXPECT_GT(hit_fraction(s, *accel), 0.15) << "the default camera should look at the scene";
+    EXPECT_GT(test::camera_hit_fraction(s, *accel), 0.15) << "the default camera should look at the scene";
     RenderSettings rs;
     rs.width = rs.height = 24;
     rs.spp = 4;

@@ -4,8 +4,6 @@
 // (raylab_tests_accel) compare with brute force and link no checks code.
 #include <gtest/gtest.h>
 
-#include <cctype>
-
 #include "accel/registry.h"
 #include "checks/classify.h"
 #include "checks/verify.h"
@@ -42,18 +40,6 @@ VerifyOptions with_rays(size_t rays, int threads = 0) {
   return vo;
 }
 
-// Every spec the registry asks to cover, except the reference itself,
-// brute force and the Moller-Trumbore variants (see test_accelerators.cpp).
-std::vector<std::string> tested_accelerators() {
-  std::vector<std::string> specs;
-  for (const auto& spec : coverage_specs()) {
-    const std::string name = Spec::parse(spec).name;
-    if (accelerator_info(name).caps.reference || name == "brute" || spec.find("tri=mt") != std::string::npos) continue;
-    specs.push_back(spec);
-  }
-  return specs;
-}
-
 class EveryAcceleratorVerified : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(EveryAcceleratorVerified, AgreesWithEmbreeAfterArbitration) {
@@ -71,13 +57,8 @@ TEST_P(EveryAcceleratorVerified, AgreesWithEmbreeAfterArbitration) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, EveryAcceleratorVerified, ::testing::ValuesIn(tested_accelerators()),
-                         [](const auto& info) {
-                           std::string s = info.param;
-                           for (char& c : s)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return s;
-                         });
+INSTANTIATE_TEST_SUITE_P(Registry, EveryAcceleratorVerified, ::testing::ValuesIn(test::specs_checked_against_brute()),
+                         [](const auto& info) { return test::gtest_name(info.param); });
 
 TEST(Embree, AgreesWithBruteForceOnSoup) {
   const TriangleMesh mesh = triangle_soup_mesh(3000, 2);

@@ -4,7 +4,7 @@
 
 #include "accel/core/intersect_triangle.h"
 #include "accel/registry.h"
-#include "base/mesh_shapes.h"
+#include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -73,36 +73,17 @@ TEST(MollerTrumbore, AgreesWithWatertightInTheInterior) {
   }
 }
 
-// Rays from outside aimed at the sphere's shared edges and vertices must hit
-// something (the surface is closed); rays from the centre must never escape.
-size_t count_sphere_leaks(const std::string& spec, size_t rays_per_kind, const Vec3f& center,
-                          size_t remove_triangle = SIZE_MAX) {
-  TriangleMesh sphere = make_uv_sphere(48, 24, center, 1.0f);
-  const TriangleMesh full = sphere;
-  if (remove_triangle < sphere.num_triangles()) sphere.triangles.erase(sphere.triangles.begin() + remove_triangle);
-  auto accel = make_accelerator(spec);
-  accel->build(sphere);
-  Pcg32 rng(42, 3);
-  size_t leaks = 0;
-  for (size_t i = 0; i < rays_per_kind; ++i) {
-    // Targets on the complete sphere, alternating edge points and vertices.
-    if (!accel->intersect1(test::ray_at_shared_edge(full, center, i, rng)).valid()) ++leaks;
-    if (!accel->intersect1(Ray(center, test::random_direction(rng))).valid()) ++leaks;
-  }
-  return leaks;
-}
-
 TEST(Watertightness, ClosedSphereHasNoLeaksWithWatertightTest) {
   for (const char* spec : {"brute", "bvh"}) {
-    EXPECT_EQ(count_sphere_leaks(spec, 20000, Vec3f(0.3f, -0.2f, 0.1f)), 0u) << spec;
+    EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 10000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the sphere's radius.
-    EXPECT_EQ(count_sphere_leaks(spec, 20000, Vec3f(1e5f, -2e4f, 3e4f)), 0u) << spec << " far";
+    EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 10000), 0u) << spec << " far";
   }
 }
 
 TEST(Watertightness, LeakCounterFindsAHole) {
   // The counter is able to fail: one missing triangle lets rays through.
-  EXPECT_GT(count_sphere_leaks("bvh", 20000, Vec3f::Zero(), 700), 0u);
+  EXPECT_GT(test::closed_sphere_leaks("bvh", Vec3f::Zero(), 10000, 700), 0u);
 }
 
 }  // namespace

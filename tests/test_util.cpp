@@ -7,7 +7,6 @@
 
 namespace raylab::test {
 
-namespace {
 CommandResult run_shell(const std::string& cmd) {
   CommandResult r;
   FILE* p = popen(cmd.c_str(), "r");
@@ -19,7 +18,6 @@ CommandResult run_shell(const std::string& cmd) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
-}  // namespace
 
 CommandResult run_raylab(const std::string& args) { return run_shell(std::string(RAYLAB_BINARY) + " " + args + " 2>&1"); }
 

@@ -26,6 +26,8 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 
+// Runs a shell command and captures its standard output (add 2>&1 for stderr).
+CommandResult run_shell(const std::string& command);
 // Runs the raylab binary with arguments (shell syntax) and captures output.
 CommandResult run_raylab(const std::string& args);
 // The same, with `dir` as the working directory.

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/report_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -22,34 +23,13 @@ namespace {
 
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
+using test::read_json;
+using test::read_lines;
 
-struct Shell {
-  int exit_code = -1;
-  std::string output;
-};
+using Shell = test::CommandResult;
 
-Shell sh(const std::string& command) {
-  Shell r;
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf{};
-  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
-
-std::vector<std::string> lines(const fs::path& p) {
-  std::ifstream in(p);
-  std::vector<std::string> out;
-  for (std::string l; std::getline(in, l);) out.push_back(l);
-  return out;
-}
+// A shell command's exit code and output (stdout and stderr).
+Shell sh(const std::string& command) { return test::run_shell(command + " 2>&1"); }
 
 const std::string kSource = RAYLAB_SOURCE_DIR;
 const std::string kCommon =
@@ -86,7 +66,7 @@ TEST(Workflow, MergedCellsEqualOneRunOverTheMatrix) {
   EXPECT_EQ(all["revision"], one["revision"]);
 
   // CSV: the same header, one row per record, rows in the JSON's order.
-  const auto csv_one = lines(dir / "one.csv"), csv_all = lines(dir / "merged.csv");
+  const auto csv_one = test::read_lines(dir / "one.csv"), csv_all = test::read_lines(dir / "merged.csv");
   ASSERT_EQ(csv_all.size(), csv_one.size());
   EXPECT_EQ(csv_all[0], csv_one[0]);
   for (size_t i = 1; i < csv_all.size(); ++i) {

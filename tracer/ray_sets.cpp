@@ -1,8 +1,10 @@
 #include "tracer/ray_sets.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "base/spec.h"
 #include "tracer/camera.h"
@@ -112,13 +114,15 @@ RaySet make_shadow_rays(const Scene& scene, const RaySet& primary, std::span<con
   return set;
 }
 
+void check_ray_set_names(const std::vector<std::string>& names) {
+  for (const auto& n : names)
+    if (std::find(ray_set_names().begin(), ray_set_names().end(), n) == ray_set_names().end())
+      throw SpecError(fmt::format("unknown ray set '{}' (available: {})", n, fmt::join(ray_set_names(), ", ")));
+}
+
 std::vector<RaySet> make_ray_sets(const Scene& scene, const std::vector<std::string>& names,
                                   const Accelerator& reference, const RaySetOptions& o) {
-  for (const auto& n : names) {
-    bool known = false;
-    for (const auto& k : ray_set_names()) known |= (k == n);
-    if (!known) throw SpecError(fmt::format("unknown ray set '{}' (available: primary, diffuse, shadow, random)", n));
-  }
+  check_ray_set_names(names);
   auto wants = [&](const char* n) {
     for (const auto& x : names)
       if (x == n) return true;

@@ -26,6 +26,8 @@ struct RaySet {
 };
 
 const std::vector<std::string>& ray_set_names();
+// Throws SpecError naming the first unknown ray set and those that exist.
+void check_ray_set_names(const std::vector<std::string>& names);
 
 RaySet make_primary_rays(const Scene& scene, int width, int height);
 // `count` rays at random positions on the image plane (for verify).

@@ -58,6 +58,7 @@ AcceleratorInfo brute_accelerator_info() {
   info.caps.quadratic = true;
   info.caps.outline = true;
   info.cover = {"brute:tri=mt"};
+  info.build_peak_bytes_per_triangle = 45;  // from its layout (40-byte leaf triangles); not measured at 10^7
   return info;
 }
 

@@ -376,6 +376,7 @@ AcceleratorInfo bvh_accelerator_info() {
                 {"child_fill", "mean children per inner node over the width"},
                 {"simd_bits", "wide layouts: SIMD width of the kernels in bits"},
                 {"block_width", "wide layouts: triangles per SIMD block"}};
+  info.build_peak_bytes_per_triangle = 170;  // measured 164 on soup:n=10^7
   return info;
 }
 

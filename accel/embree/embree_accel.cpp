@@ -183,122 +183,111 @@ class EmbreeAccel final : public Accelerator {
 
   void intersect_prepared(const PreparedRays* prepared, size_t begin, std::span<const Ray> rays, std::span<Hit> hits,
                           TraversalStats* stats) const override {
-    const EmbreePrepared* p = mine(prepared, false, begin, rays.size());
-    if (!p) {
-      intersect(rays, hits, stats);
-      return;
-    }
-    const size_t end = begin + rays.size();
-    RTCIntersectContext ctx = context();
-    RTCScene s = scene();
-    switch (api_) {
-      case Api::single:
-        // The traced loop: Embree's call and writing our hit, nothing else.
-        for (size_t i = begin; i < end; ++i) {
-          RTCRayHit rh = p->rayhits[i];
-          rtcIntersect1(s, &ctx, &rh);
-          write_hit(rh, hits[i - begin]);
-        }
-        break;
-      case Api::stream: {
-        RTCRayHit block[kStreamBlock];
-        for (size_t b = begin; b < end; b += kStreamBlock) {
-          const size_t m = std::min(kStreamBlock, end - b);
-          std::memcpy(static_cast<void*>(block), p->rayhits.data() + b, m * sizeof(RTCRayHit));
-          rtcIntersect1M(s, &ctx, block, static_cast<unsigned>(m), sizeof(RTCRayHit));
-          for (size_t k = 0; k < m; ++k) write_hit(block[k], hits[b + k - begin]);
-        }
-        break;
-      }
-      case Api::packet4: intersect_packets(p->p4, s, ctx, begin, end, hits); break;
-      case Api::packet8: intersect_packets(p->p8, s, ctx, begin, end, hits); break;
-      case Api::packet16: intersect_packets(p->p16, s, ctx, begin, end, hits); break;
-    }
-    for (const RayFix& f : p->fixes_in(begin, end)) fix_hit(f, hits[f.index - begin]);
-    if (stats) stats->rays += rays.size();  // Embree exposes no per-ray counters
+    trace_prepared<false>(prepared, begin, rays, hits, stats);
   }
 
   void occluded_prepared(const PreparedRays* prepared, size_t begin, std::span<const Ray> rays, std::span<uint8_t> occ,
                          TraversalStats* stats) const override {
-    const EmbreePrepared* p = mine(prepared, true, begin, rays.size());
+    trace_prepared<true>(prepared, begin, rays, occ, stats);
+  }
+
+  // Both queries, every API mode: the traced loops hold Embree's call and
+  // writing our answer (a Hit, or an occlusion byte), nothing else.
+  template <bool kOcclusion, class Out>
+  void trace_prepared(const PreparedRays* prepared, size_t begin, std::span<const Ray> rays, std::span<Out> out,
+                      TraversalStats* stats) const {
+    const EmbreePrepared* p = mine(prepared, kOcclusion, begin, rays.size());
     if (!p) {
-      occluded(rays, occ, stats);
+      trace_unprepared<kOcclusion>(rays, out, stats);
       return;
     }
+    const auto& aos = [p]() -> const auto& {
+      if constexpr (kOcclusion) return p->rays;  // RTCRay
+      else return p->rayhits;                    // RTCRayHit
+    }();
+    using EmbreeRay = std::decay_t<decltype(aos[0])>;
     const size_t end = begin + rays.size();
     RTCIntersectContext ctx = context();
     RTCScene s = scene();
     switch (api_) {
       case Api::single:
         for (size_t i = begin; i < end; ++i) {
-          RTCRay ray = p->rays[i];
-          rtcOccluded1(s, &ctx, &ray);
-          occ[i - begin] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
+          EmbreeRay r = aos[i];
+          trace1(s, ctx, r);
+          write_answer(r, out[i - begin]);
         }
         break;
       case Api::stream: {
-        RTCRay block[kStreamBlock];
+        EmbreeRay block[kStreamBlock];
         for (size_t b = begin; b < end; b += kStreamBlock) {
           const size_t m = std::min(kStreamBlock, end - b);
-          std::memcpy(static_cast<void*>(block), p->rays.data() + b, m * sizeof(RTCRay));
-          rtcOccluded1M(s, &ctx, block, static_cast<unsigned>(m), sizeof(RTCRay));
-          for (size_t k = 0; k < m; ++k) occ[b + k - begin] = block[k].tfar < 0.0f ? 1 : 0;
+          std::memcpy(static_cast<void*>(block), aos.data() + b, m * sizeof(EmbreeRay));
+          trace1m(s, ctx, block, m);
+          for (size_t k = 0; k < m; ++k) write_answer(block[k], out[b + k - begin]);
         }
         break;
       }
-      case Api::packet4: occluded_packets(p->p4, s, ctx, begin, end, occ); break;
-      case Api::packet8: occluded_packets(p->p8, s, ctx, begin, end, occ); break;
-      case Api::packet16: occluded_packets(p->p16, s, ctx, begin, end, occ); break;
+      case Api::packet4: trace_packets(p->p4, s, ctx, begin, end, out); break;
+      case Api::packet8: trace_packets(p->p8, s, ctx, begin, end, out); break;
+      case Api::packet16: trace_packets(p->p16, s, ctx, begin, end, out); break;
     }
-    for (const RayFix& f : p->fixes_in(begin, end))
-      if (!f.traced) occ[f.index - begin] = 0;
-    if (stats) stats->rays += rays.size();
+    for (const RayFix& f : p->fixes_in(begin, end)) fix_answer(f, out[f.index - begin]);
+    if (stats) stats->rays += rays.size();  // Embree exposes no per-ray counters
+  }
+
+  // The two queries' calls and answers, chosen by overload.
+  static void trace1(RTCScene s, RTCIntersectContext& ctx, RTCRayHit& r) { rtcIntersect1(s, &ctx, &r); }
+  static void trace1(RTCScene s, RTCIntersectContext& ctx, RTCRay& r) { rtcOccluded1(s, &ctx, &r); }
+  static void trace1m(RTCScene s, RTCIntersectContext& ctx, RTCRayHit* r, size_t m) {
+    rtcIntersect1M(s, &ctx, r, static_cast<unsigned>(m), sizeof(RTCRayHit));
+  }
+  static void trace1m(RTCScene s, RTCIntersectContext& ctx, RTCRay* r, size_t m) {
+    rtcOccluded1M(s, &ctx, r, static_cast<unsigned>(m), sizeof(RTCRay));
+  }
+  static void write_answer(const RTCRayHit& rh, Hit& h) { write_hit(rh, h); }
+  static void write_answer(const RTCRay& r, uint8_t& occluded) {
+    occluded = r.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
+  }
+  static void fix_answer(const RayFix& f, Hit& h) { fix_hit(f, h); }
+  static void fix_answer(const RayFix& f, uint8_t& occluded) {
+    if (!f.traced) occluded = 0;
   }
 
   // Unprepared batches (the tracer, verify): single-ray mode converts ray by
   // ray on the stack (no allocation for one-ray calls); the other modes
   // prepare the batch first.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    RTCScene s = scene();
+    trace_unprepared<false>(rays, hits, stats);
+  }
+
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    trace_unprepared<true>(rays, occ, stats);
+  }
+
+  template <bool kOcclusion, class Out>
+  void trace_unprepared(std::span<const Ray> rays, std::span<Out> out, TraversalStats* stats) const {
     if (api_ != Api::single) {
-      const auto p = prepare(rays, false);
-      intersect_prepared(p.get(), 0, rays, hits, stats);
+      const auto p = prepare(rays, kOcclusion);
+      trace_prepared<kOcclusion>(p.get(), 0, rays, out, stats);
       return;
     }
+    RTCScene s = scene();
     RTCIntersectContext ctx = context();
     for (size_t i = 0; i < rays.size(); ++i) {
       RTCRayHit rh;
       RayFix fix;
       reset_hit(rh.hit);
       const bool mapped = map_ray(rays[i], rh.ray, fix);
-      if (mapped && !fix.traced) {
-        hits[i] = Hit{};
-        continue;
+      out[i] = Out{};  // a miss, not occluded
+      if (mapped && !fix.traced) continue;  // invalid, or an empty window
+      if constexpr (kOcclusion) {
+        trace1(s, ctx, rh.ray);
+        write_answer(rh.ray, out[i]);
+      } else {
+        trace1(s, ctx, rh);
+        write_answer(rh, out[i]);
+        if (mapped) fix_answer(fix, out[i]);
       }
-      rtcIntersect1(s, &ctx, &rh);
-      write_hit(rh, hits[i]);
-      if (mapped) fix_hit(fix, hits[i]);
-    }
-    if (stats) stats->rays += rays.size();
-  }
-
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    RTCScene s = scene();
-    if (api_ != Api::single) {
-      const auto p = prepare(rays, true);
-      occluded_prepared(p.get(), 0, rays, occ, stats);
-      return;
-    }
-    RTCIntersectContext ctx = context();
-    for (size_t i = 0; i < rays.size(); ++i) {
-      RTCRay ray;
-      RayFix fix;
-      if (map_ray(rays[i], ray, fix) && !fix.traced) {
-        occ[i] = 0;
-        continue;
-      }
-      rtcOccluded1(s, &ctx, &ray);
-      occ[i] = ray.tfar < 0.0f ? 1 : 0;  // Embree sets tfar = -inf on a hit
     }
     if (stats) stats->rays += rays.size();
   }
@@ -382,6 +371,7 @@ AcceleratorInfo embree_accelerator_info() {
   info.cover = {"embree:robust=1", "embree:api=packet8", "embree:api=stream"};
   info.describe = embree_description;
   info.stats = {{"robust", "1 when built with RTC_SCENE_FLAG_ROBUST"}};
+  info.build_peak_bytes_per_triangle = 135;  // measured 130 on soup:n=10^7
   return info;
 }
 

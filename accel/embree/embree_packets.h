@@ -5,35 +5,29 @@
 #include <embree3/rtcore.h>
 
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "accel/embree/embree_ray_map.h"
 
 namespace raylab::embree_adapter {
 
-// SOA packet types and calls per width.
+// SOA packet types and calls per width (4, 8 or 16).
 template <int N>
-struct PacketApi;
-template <>
-struct PacketApi<4> {
-  using RayHitN = RTCRayHit4;
-  using RayN = RTCRay4;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect4(v, s, c, r); }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded4(v, s, c, r); }
-};
-template <>
-struct PacketApi<8> {
-  using RayHitN = RTCRayHit8;
-  using RayN = RTCRay8;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect8(v, s, c, r); }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded8(v, s, c, r); }
-};
-template <>
-struct PacketApi<16> {
-  using RayHitN = RTCRayHit16;
-  using RayN = RTCRay16;
-  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) { rtcIntersect16(v, s, c, r); }
-  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) { rtcOccluded16(v, s, c, r); }
+struct PacketApi {
+  static_assert(N == 4 || N == 8 || N == 16, "Embree packets are 4, 8 or 16 wide");
+  using RayHitN = std::conditional_t<N == 4, RTCRayHit4, std::conditional_t<N == 8, RTCRayHit8, RTCRayHit16>>;
+  using RayN = std::conditional_t<N == 4, RTCRay4, std::conditional_t<N == 8, RTCRay8, RTCRay16>>;
+  static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHitN* r) {
+    if constexpr (N == 4) rtcIntersect4(v, s, c, r);
+    else if constexpr (N == 8) rtcIntersect8(v, s, c, r);
+    else rtcIntersect16(v, s, c, r);
+  }
+  static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, RayN* r) {
+    if constexpr (N == 4) rtcOccluded4(v, s, c, r);
+    else if constexpr (N == 8) rtcOccluded8(v, s, c, r);
+    else rtcOccluded16(v, s, c, r);
+  }
 };
 
 // Embree requires the valid mask aligned like the packet.
@@ -105,41 +99,32 @@ const int* packet_mask(const Packets<N>& pk, size_t p, size_t begin, size_t end,
   return local.v;
 }
 
-template <int N>
-inline void intersect_packets(const Packets<N>& pk, RTCScene s, RTCIntersectContext& ctx, size_t begin, size_t end,
-                       std::span<Hit> hits) {
+// Traces packets [begin / N, end / N] of a prepared set, masked to the rays
+// in [begin, end): closest hits into a Hit span, occlusion into bytes.
+template <int N, class Out>
+inline void trace_packets(const Packets<N>& pk, RTCScene s, RTCIntersectContext& ctx, size_t begin, size_t end,
+                          std::span<Out> out) {
+  constexpr bool kOcclusion = std::is_same_v<Out, uint8_t>;
   ValidMask<N> local;
   for (size_t p = begin / N; p * N < end; ++p) {
-    typename PacketApi<N>::RayHitN rh = pk.hit[p];
-    PacketApi<N>::intersect(packet_mask(pk, p, begin, end, local), s, &ctx, &rh);
+    auto packet = [&] {
+      if constexpr (kOcclusion) return pk.ray[p];
+      else return pk.hit[p];
+    }();
+    const int* valid = packet_mask(pk, p, begin, end, local);
+    if constexpr (kOcclusion) PacketApi<N>::occluded(valid, s, &ctx, &packet);
+    else PacketApi<N>::intersect(valid, s, &ctx, &packet);
     const size_t base = p * N;
     for (int k = 0; k < N; ++k) {
       const size_t i = base + k;
       if (i < begin || i >= end) continue;
-      Hit& h = hits[i - begin];
-      if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
-        h.t = rh.ray.tfar[k];
-        h.u = rh.hit.u[k];
-        h.v = rh.hit.v[k];
-        h.prim = rh.hit.primID[k];
+      if constexpr (kOcclusion) {
+        out[i - begin] = packet.tfar[k] < 0.0f ? 1 : 0;  // tfar = -inf on a hit
+      } else if (packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
+        out[i - begin] = Hit{packet.ray.tfar[k], packet.hit.u[k], packet.hit.v[k], packet.hit.primID[k]};
       } else {
-        h = Hit{};
+        out[i - begin] = Hit{};
       }
-    }
-  }
-}
-
-template <int N>
-inline void occluded_packets(const Packets<N>& pk, RTCScene s, RTCIntersectContext& ctx, size_t begin, size_t end,
-                      std::span<uint8_t> occ) {
-  ValidMask<N> local;
-  for (size_t p = begin / N; p * N < end; ++p) {
-    typename PacketApi<N>::RayN r = pk.ray[p];
-    PacketApi<N>::occluded(packet_mask(pk, p, begin, end, local), s, &ctx, &r);
-    const size_t base = p * N;
-    for (int k = 0; k < N; ++k) {
-      const size_t i = base + k;
-      if (i >= begin && i < end) occ[i - begin] = r.tfar[k] < 0.0f ? 1 : 0;  // tfar = -inf on a hit
     }
   }
 }

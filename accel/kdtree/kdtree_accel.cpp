@@ -134,6 +134,7 @@ AcceleratorInfo kdtree_accelerator_info() {
                 {"max_leaf_size", "largest leaf, in triangles"},
                 {"avg_leaf_size", "mean references per non-empty leaf"},
                 {"max_depth_limit", "the depth limit in force (auto: 8 + 1.3 log2 N)"}};
+  info.build_peak_bytes_per_triangle = 300;  // conservative, from its layout; not measured at 10^7 (build time)
   return info;
 }
 

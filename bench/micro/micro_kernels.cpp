@@ -61,20 +61,29 @@ std::vector<Tri> triangle_pool(uint64_t seed) {
   return tris;
 }
 
-void BM_TriangleWatertight(benchmark::State& state) {
-  const auto rays = ray_pool(1);
+// One triangle test per iteration: ray k of the pool against triangle 7k;
+// `test(k, triangle, t, u, v)` says whether it hit.
+template <class Test>
+void time_triangle_test(benchmark::State& state, Test test) {
   const auto tris = triangle_pool(2);
-  std::vector<WatertightRay> pre;
-  for (const auto& r : rays) pre.emplace_back(r);
   size_t i = 0, hits = 0;
   for (auto _ : state) {
     const size_t k = i++ & (kPool - 1);
     const Tri& t = tris[(k * 7) & (kPool - 1)];
     float tt = 0.0f, u = 0.0f, v = 0.0f;
-    hits += intersect_watertight(pre[k], t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v);
+    hits += test(k, t, tt, u, v);
     benchmark::DoNotOptimize(tt);
   }
   state.counters["hit_rate"] = static_cast<double>(hits) / static_cast<double>(std::max<size_t>(i, 1));
+}
+
+void BM_TriangleWatertight(benchmark::State& state) {
+  const auto rays = ray_pool(1);
+  std::vector<WatertightRay> pre;
+  for (const auto& r : rays) pre.emplace_back(r);
+  time_triangle_test(state, [&](size_t k, const Tri& t, float& tt, float& u, float& v) {
+    return intersect_watertight(pre[k], t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v);
+  });
 }
 BENCHMARK(BM_TriangleWatertight);
 
@@ -82,31 +91,18 @@ BENCHMARK(BM_TriangleWatertight);
 // a single ray against a single triangle costs.
 void BM_TriangleWatertightWithSetup(benchmark::State& state) {
   const auto rays = ray_pool(1);
-  const auto tris = triangle_pool(2);
-  size_t i = 0;
-  for (auto _ : state) {
-    const size_t k = i++ & (kPool - 1);
-    const Tri& t = tris[(k * 7) & (kPool - 1)];
-    float tt = 0.0f, u = 0.0f, v = 0.0f;
+  time_triangle_test(state, [&](size_t k, const Tri& t, float& tt, float& u, float& v) {
     const WatertightRay w(rays[k]);
-    benchmark::DoNotOptimize(intersect_watertight(w, t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v));
-    benchmark::DoNotOptimize(tt);
-  }
+    return intersect_watertight(w, t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v);
+  });
 }
 BENCHMARK(BM_TriangleWatertightWithSetup);
 
 void BM_TriangleMollerTrumbore(benchmark::State& state) {
   const auto rays = ray_pool(1);
-  const auto tris = triangle_pool(2);
-  size_t i = 0, hits = 0;
-  for (auto _ : state) {
-    const size_t k = i++ & (kPool - 1);
-    const Tri& t = tris[(k * 7) & (kPool - 1)];
-    float tt = 0.0f, u = 0.0f, v = 0.0f;
-    hits += intersect_moller_trumbore(rays[k], t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v);
-    benchmark::DoNotOptimize(tt);
-  }
-  state.counters["hit_rate"] = static_cast<double>(hits) / static_cast<double>(std::max<size_t>(i, 1));
+  time_triangle_test(state, [&](size_t k, const Tri& t, float& tt, float& u, float& v) {
+    return intersect_moller_trumbore(rays[k], t.p0, t.p1, t.p2, 0.0f, 1e30f, tt, u, v);
+  });
 }
 BENCHMARK(BM_TriangleMollerTrumbore);
 
