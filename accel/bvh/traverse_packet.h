@@ -312,19 +312,7 @@ class PacketTracer {
       V v = ax * cy - ay * cx;
       V w = bx * ay - by * ax;
       const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
-      if (zeros != 0) [[unlikely]] {
-        alignas(64) float fax[kPacketSize], fay[kPacketSize], fbx[kPacketSize], fby[kPacketSize], fcx[kPacketSize],
-            fcy[kPacketSize], fu[kPacketSize], fv[kPacketSize], fw[kPacketSize];
-        ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
-        u.store(fu), v.store(fv), w.store(fw);
-        for (uint32_t m = zeros; m != 0; m &= m - 1) {
-          const uint32_t i = simd::ctz(m);
-          fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
-          fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
-          fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
-        }
-        u = V::load(fu), v = V::load(fv), w = V::load(fw);
-      }
+      if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
       const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
       const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
       uint32_t mask = ~(neg & pos) & active;
