@@ -97,11 +97,22 @@ class PacketTracer {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
     for (size_t b = 0; b < rays.size(); b += kPacketSize) {
       const size_t n = std::min<size_t>(kPacketSize, rays.size() - b);
-      trace_group(rays.subspan(b, n), hits.subspan(b, n));
+      if (shares_origin(rays.subspan(b, n))) {
+        trace_group(rays.subspan(b, n), hits.subspan(b, n));
+      } else {
+        // The common incoherent case first, in the plain single-ray loop.
+        for (size_t i = b; i < b + n; ++i) trace_single(rays[i], hits[i]);
+      }
     }
   }
 
  private:
+  static bool shares_origin(std::span<const Ray> rays) {
+    bool same = true;
+    for (const Ray& r : rays) same &= r.org == rays[0].org;
+    return same;
+  }
+
   void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
   // Up to 16 rays: the packet if they share an octant, else one by one.
