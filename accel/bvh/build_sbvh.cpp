@@ -259,39 +259,20 @@ class SbvhBuilder {
       sb = std::move(red.sb);
     }
     SpatialSplit best;
-    float right_area[kMaxSpatialBins];
-    uint32_t right_count[kMaxSpatialBins];
-    __m128 right_lo[kMaxSpatialBins], right_hi[kMaxSpatialBins];
+    static_assert(kMaxSpatialBins <= sah::kMaxBins);
     for (int a = 0; a < 3; ++a) {
       if (g.inv_width[a] <= 0.0f) continue;
-      Box4 acc;
-      uint32_t cnt = 0;
-      for (int b = nb - 1; b > 0; --b) {
-        acc.extend(sb->box(a, b));
-        cnt += sb->exit[a][b];
-        right_lo[b] = acc.lo;
-        right_hi[b] = acc.hi;
-        right_area[b] = acc.half_area();
-        right_count[b] = cnt;
-      }
-      Box4 left;
-      uint32_t lc = 0;
-      for (int b = 1; b < nb; ++b) {
-        left.extend(sb->box(a, b - 1));
-        lc += sb->enter[a][b - 1];
-        if (lc == 0 || right_count[b] == 0) continue;
-        const float cost = left.half_area() * static_cast<float>(lc) + right_area[b] * static_cast<float>(right_count[b]);
-        if (cost < best.cost) {
-          best.cost = cost;
-          best.axis = a;
-          best.pos = g.plane(a, b);
-          best.left = left;
-          best.right.lo = right_lo[b];
-          best.right.hi = right_hi[b];
-          best.left_count = lc;
-          best.right_count = right_count[b];
-        }
-      }
+      sah::sweep_bins(
+          nb, best.cost, [&](int b) { return sb->box(a, b); }, [&](int b) { return sb->enter[a][b]; },
+          [&](int b) { return sb->exit[a][b]; },
+          [&](int b, const Box4& left, const Box4& right, uint32_t lc, uint32_t rc) {
+            best.axis = a;
+            best.pos = g.plane(a, b);
+            best.left = left;
+            best.right = right;
+            best.left_count = lc;
+            best.right_count = rc;
+          });
     }
     return best;
   }

@@ -179,41 +179,60 @@ inline std::unique_ptr<BinSet> bin_refs(const BuildRef* refs, size_t b, size_t e
   return std::move(red.bins);
 }
 
-// The cheapest bin boundary over the three axes (axis -1 when none splits).
-inline Split find_binned_split(const BinSet& bins, const Binning& bn, int nb) {
-  Split best;
+// The SAH sweep over the nb bins of one axis, shared by the object splits
+// here and SBVH's spatial splits: a right-to-left pass accumulates the boxes
+// and counts right of each boundary, a left-to-right pass evaluates every
+// boundary b (1..nb-1) with references on both sides and calls
+// take(b, cost, left, right, left_count, right_count) where the cost is below
+// `best_cost` (which take lowers). box(b): bin b's box; left_of(b) /
+// right_of(b): references counted left / right of a boundary from bin b.
+template <typename BoxOf, typename LeftOf, typename RightOf, typename Take>
+inline void sweep_bins(int nb, float& best_cost, BoxOf&& box, LeftOf&& left_of, RightOf&& right_of, Take&& take) {
   float right_area[kMaxBins];
   uint32_t right_count[kMaxBins];
   __m128 right_lo[kMaxBins], right_hi[kMaxBins];
+  Box4 acc;
+  uint32_t cnt = 0;
+  for (int b = nb - 1; b > 0; --b) {
+    acc.extend(box(b));
+    cnt += right_of(b);
+    right_lo[b] = acc.lo;
+    right_hi[b] = acc.hi;
+    right_area[b] = acc.half_area();
+    right_count[b] = cnt;
+  }
+  Box4 left;
+  uint32_t lc = 0;
+  for (int b = 1; b < nb; ++b) {
+    left.extend(box(b - 1));
+    lc += left_of(b - 1);
+    if (lc == 0 || right_count[b] == 0) continue;
+    const float cost = left.half_area() * static_cast<float>(lc) + right_area[b] * static_cast<float>(right_count[b]);
+    if (cost < best_cost) {
+      best_cost = cost;
+      Box4 right;
+      right.lo = right_lo[b];
+      right.hi = right_hi[b];
+      take(b, left, right, lc, right_count[b]);
+    }
+  }
+}
+
+// The cheapest bin boundary over the three axes (axis -1 when none splits).
+inline Split find_binned_split(const BinSet& bins, const Binning& bn, int nb) {
+  Split best;
   for (int a = 0; a < 3; ++a) {
     if (bn.scale_s[a] <= 0.0f) continue;
-    Box4 acc;
-    uint32_t cnt = 0;
-    for (int b = nb - 1; b > 0; --b) {
-      acc.extend(bins.box(a, b));
-      cnt += bins.count[a][b];
-      right_lo[b] = acc.lo;
-      right_hi[b] = acc.hi;
-      right_area[b] = acc.half_area();
-      right_count[b] = cnt;
-    }
-    Box4 left;
-    uint32_t lc = 0;
-    for (int b = 1; b < nb; ++b) {
-      left.extend(bins.box(a, b - 1));
-      lc += bins.count[a][b - 1];
-      if (lc == 0 || right_count[b] == 0) continue;
-      const float cost = left.half_area() * static_cast<float>(lc) + right_area[b] * static_cast<float>(right_count[b]);
-      if (cost < best.cost) {
-        best.cost = cost;
-        best.axis = a;
-        best.pos = b;
-        best.left = left;
-        best.right.lo = right_lo[b];
-        best.right.hi = right_hi[b];
-        best.left_count = lc;
-      }
-    }
+    const auto count = [&](int b) { return bins.count[a][b]; };
+    sweep_bins(
+        nb, best.cost, [&](int b) { return bins.box(a, b); }, count, count,
+        [&](int b, const Box4& left, const Box4& right, uint32_t lc, uint32_t) {
+          best.axis = a;
+          best.pos = b;
+          best.left = left;
+          best.right = right;
+          best.left_count = lc;
+        });
   }
   return best;
 }

@@ -97,11 +97,22 @@ class PacketTracer {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
     for (size_t b = 0; b < rays.size(); b += kPacketSize) {
       const size_t n = std::min<size_t>(kPacketSize, rays.size() - b);
-      trace_group(rays.subspan(b, n), hits.subspan(b, n));
+      if (shares_origin(rays.subspan(b, n))) {
+        trace_group(rays.subspan(b, n), hits.subspan(b, n));
+      } else {
+        // The common incoherent case first, in the plain single-ray loop.
+        for (size_t i = b; i < b + n; ++i) trace_single(rays[i], hits[i]);
+      }
     }
   }
 
  private:
+  static bool shares_origin(std::span<const Ray> rays) {
+    bool same = true;
+    for (const Ray& r : rays) same &= r.org == rays[0].org;
+    return same;
+  }
+
   void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
   // Up to 16 rays: the packet if they share an octant, else one by one.
@@ -312,19 +323,7 @@ class PacketTracer {
       V v = ax * cy - ay * cx;
       V w = bx * ay - by * ax;
       const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
-      if (zeros != 0) [[unlikely]] {
-        alignas(64) float fax[kPacketSize], fay[kPacketSize], fbx[kPacketSize], fby[kPacketSize], fcx[kPacketSize],
-            fcy[kPacketSize], fu[kPacketSize], fv[kPacketSize], fw[kPacketSize];
-        ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
-        u.store(fu), v.store(fv), w.store(fw);
-        for (uint32_t m = zeros; m != 0; m &= m - 1) {
-          const uint32_t i = simd::ctz(m);
-          fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
-          fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
-          fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
-        }
-        u = V::load(fu), v = V::load(fv), w = V::load(fw);
-      }
+      if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
       const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
       const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
       uint32_t mask = ~(neg & pos) & active;

@@ -67,6 +67,27 @@ struct BlockHits {
   alignas(64) float v[W];
 };
 
+// An edge function is exactly 0 in the lanes of `zeros`: recompute those
+// lanes' three edge functions in double precision, as the scalar test does.
+// Shared by the block test (a triangle per lane) and the packet test (a ray
+// per lane, traverse_packet.h).
+template <int L>
+inline void recompute_edges_in_double(uint32_t zeros, simd::vfloat<L> ax, simd::vfloat<L> ay, simd::vfloat<L> bx,
+                                      simd::vfloat<L> by, simd::vfloat<L> cx, simd::vfloat<L> cy,
+                                      simd::vfloat<L>& u, simd::vfloat<L>& v, simd::vfloat<L>& w) {
+  using V = simd::vfloat<L>;
+  alignas(64) float fax[L], fay[L], fbx[L], fby[L], fcx[L], fcy[L], fu[L], fv[L], fw[L];
+  ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
+  u.store(fu), v.store(fv), w.store(fw);
+  for (uint32_t m = zeros; m != 0; m &= m - 1) {
+    const uint32_t i = simd::ctz(m);
+    fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
+    fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
+    fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
+  }
+  u = V::load(fu), v = V::load(fv), w = V::load(fw);
+}
+
 // Tests all W lanes; returns the mask of lanes hit with tmin <= t <= tmax and
 // fills t, u, v for them.
 template <int W>
@@ -92,20 +113,7 @@ template <int W>
   V w = bx * ay - by * ax;
   const V zero = V::broadcast(0.0f);
   const uint32_t zeros = cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero);
-  if (zeros != 0) [[unlikely]] {
-    // An edge function is exactly 0: recompute that lane's three in double
-    // precision, as the scalar test does.
-    alignas(64) float fax[W], fay[W], fbx[W], fby[W], fcx[W], fcy[W], fu[W], fv[W], fw[W];
-    ax.store(fax), ay.store(fay), bx.store(fbx), by.store(fby), cx.store(fcx), cy.store(fcy);
-    u.store(fu), v.store(fv), w.store(fw);
-    for (uint32_t m = zeros; m != 0; m &= m - 1) {
-      const uint32_t i = simd::ctz(m);
-      fu[i] = static_cast<float>(static_cast<double>(fcx[i]) * fby[i] - static_cast<double>(fcy[i]) * fbx[i]);
-      fv[i] = static_cast<float>(static_cast<double>(fax[i]) * fcy[i] - static_cast<double>(fay[i]) * fcx[i]);
-      fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
-    }
-    u = V::load(fu), v = V::load(fv), w = V::load(fw);
-  }
+  if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
   // Reject when the edge functions have mixed signs (a lane with a NaN edge
   // function passes here, as in the scalar test, and fails the range test).
   const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
