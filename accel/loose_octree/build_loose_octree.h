@@ -16,7 +16,7 @@ namespace raylab {
 struct LooseOctreeOptions {
   double looseness = 2.0;  // k >= 1
   uint32_t leaf = 4;
-  int max_depth = 12;
+  int max_depth = 20;
 };
 
 OctreeTree build_loose_octree(const TriangleMesh& mesh, const LooseOctreeOptions& opt, LooseBoxes& boxes);

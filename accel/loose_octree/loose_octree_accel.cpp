@@ -62,7 +62,7 @@ AcceleratorInfo loose_octree_accelerator_info() {
       "children walked by entry distance",
       {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)"},
        {"leaf", "4", "a node with at most this many triangles keeps them (1..1000)"},
-       {"max_depth", "12", "depth limit, root = 0 (0..20)"},
+       {"max_depth", "20", "depth limit, root = 0 (0..20)"},
        triangle_test_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         LooseOctreeOptions opt;
