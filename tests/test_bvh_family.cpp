@@ -735,11 +735,10 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   // single-ray kernel: every field equal. Coincident copies of a triangle
   // make exact ties, which both must give to the lowest primitive id.
   for (const Reference& ref : references()) {
-    Scene s = ref.scene;
+    test::NamedMesh s = ref.scene;
     const size_t n = s.mesh.triangles.size();
     for (size_t i = 0; i < std::min<size_t>(n, 200); ++i) s.mesh.triangles.push_back(s.mesh.triangles[i]);
-    RaySet primary = make_primary_rays(s, 47, 40);
-    std::vector<Ray> rays = primary.rays;
+    std::vector<Ray> rays = test::camera_rays(s.mesh, 47, 40);
     for (size_t i = 5; i < rays.size(); i += 97) rays[i].dir = Vec3f(0, 0, 0);   // invalid
     for (size_t i = 9; i < rays.size(); i += 89) rays[i].dir.x() = 0.0f;          // axis-parallel component
     for (size_t i = 13; i < rays.size(); i += 83) rays[i].tmin = -1.0f;           // tmin < 0
