@@ -18,7 +18,9 @@ inline ImplicitGridView grid_view(const ImplicitGrid& g) { return ImplicitGridVi
 
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_grid(const ImplicitGridView& v, const Ray& ray, TraversalStats* stats) {
-  const ImplicitGrid& g = *v.g;
+  // Traced before build(): no grid yet, every ray misses.
+  static const ImplicitGrid kUnbuilt;
+  const ImplicitGrid& g = v.g ? *v.g : kUnbuilt;
   return walk_grid<kTest, kAnyHit, kCount>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
     const int64_t sy = g.dda.stride[1], sz = g.dda.stride[2];
     dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double, double t_exit) {
