@@ -11,6 +11,7 @@
 #include "accel/kdtree/kdtree_accel.h"
 #include "accel/grid/grid_accels.h"
 #include "accel/hgrid/hgrid_accel.h"
+#include "accel/loose_octree/loose_octree_accel.h"
 #include "accel/octree/octree_accel.h"
 
 namespace raylab {
@@ -27,6 +28,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       grid2_accelerator_info(),
       octree_accelerator_info(),
       hgrid_accelerator_info(),
+      loose_octree_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)

@@ -7,6 +7,7 @@
 #include "accel/core/batch_accelerator.h"
 #include "accel/grid/grid_outline.h"
 #include "accel/grid/traverse_hash_grid.h"
+#include "accel/grid/traverse_implicit_grid.h"
 #include "accel/grid/traverse_two_level_grid.h"
 #include "accel/grid/traverse_uniform_grid.h"
 
@@ -55,9 +56,23 @@ AcceleratorInfo grid_info(const char* name, const char* help, bool with_res, boo
 }  // namespace
 
 AcceleratorInfo grid_accelerator_info() {
-  return grid_info<UniformGrid, build_uniform_grid>(
+  AcceleratorInfo info = grid_info<UniformGrid, build_uniform_grid>(
       "grid", "dense uniform grid, n^(1/3) rule, exact SAT assignment, 6-connected 3D-DDA (Amanatides & Woo 1987)",
       true, false, 75);  // peak bytes per triangle: measured 68 on soup:n=10^7
+  // storage=implicit (accel/grid/implicit_grid.h): the same resolution and
+  // DDA, cells found as the AND of per-slab bit arrays.
+  info.params.push_back({"storage", "dense", "dense (a list per cell) or implicit (a bit array per x, y and z slab; "
+                                             "a cell's triangles = the AND of its three; bounding-box assignment)"});
+  info.make = [dense = info.make](const Params& p) -> std::unique_ptr<Accelerator> {
+    if (p.choice("storage", {"dense", "implicit"}) == "dense") return dense(p);
+    if (p.given("assign")) throw SpecError("grid: assign does not apply to storage=implicit (bounding boxes by slab)");
+    return std::make_unique<GridAccel<ImplicitGrid, build_implicit_grid>>(parse_grid_options("grid", p, true, false));
+  };
+  info.cover.push_back("grid:storage=implicit");
+  info.stats.insert(info.stats.end(), {{"slabs", "storage=implicit: slab bit arrays (nx + ny + nz)"},
+                                       {"slab_bits_set", "storage=implicit: set bits over all slabs"},
+                                       {"slab_words", "storage=implicit: 64-bit words per slab"}});
+  return info;
 }
 
 AcceleratorInfo hashgrid_accelerator_info() {

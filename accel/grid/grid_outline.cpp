@@ -66,4 +66,20 @@ void grid_outline(const TwoLevelGrid& grid, int max_depth, StructureOutline& out
   }
 }
 
+void grid_outline(const ImplicitGrid& grid, int max_depth, StructureOutline& out) {
+  out.what = "grid cells whose x, y and z slabs share a triangle (implicit)";
+  if (grid.empty || !out.add(OutlineBox{grid_box(grid.dda), 0, false}) || max_depth < 1) return;
+  const DdaGrid& g = grid.dda;
+  for (int64_t z = 0; z < g.res[2]; ++z)
+    for (int64_t y = 0; y < g.res[1]; ++y)
+      for (int64_t x = 0; x < g.res[0]; ++x) {
+        const uint64_t* sx = grid.bits.data() + grid.slab(0, static_cast<int32_t>(x)) * grid.words;
+        const uint64_t* sy = grid.bits.data() + grid.slab(1, static_cast<int32_t>(y)) * grid.words;
+        const uint64_t* sz = grid.bits.data() + grid.slab(2, static_cast<int32_t>(z)) * grid.words;
+        bool occupied = false;
+        for (size_t w = 0; w < grid.words && !occupied; ++w) occupied = (sx[w] & sy[w] & sz[w]) != 0;
+        if (occupied && !out.add(OutlineBox{cell_box(g, x, y, z), 1, true})) return;
+      }
+}
+
 }  // namespace raylab

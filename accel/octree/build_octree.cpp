@@ -93,6 +93,17 @@ class OctreeBuilder {
         if (hits >> ch & 1u) child_ids[ch].push_back(id);
     }
     const size_t total = ids.size();
+    // A split that multiplies the references (triangles meeting in a vertex
+    // or an edge, large triangles over a small cluster) buys nothing: keep
+    // the node as a leaf. Isolating a cluster (all references in one child)
+    // is progress and goes on.
+    size_t child_refs = 0;
+    for (const auto& c : child_ids) child_refs += c.size();
+    if (opt_.assign == OctreeAssign::Exact && static_cast<double>(child_refs) > opt_.max_growth * static_cast<double>(total)) {
+      n.nonempty = true;
+      n.refs = std::move(ids);
+      return;
+    }
     std::vector<uint32_t>().swap(ids);
     n.refs = std::move(stay);
     n.kids = std::make_unique<std::array<TmpNode, 8>>();

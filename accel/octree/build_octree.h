@@ -25,7 +25,10 @@ enum class OctreeAssign : uint8_t { Exact, Straddle };
 
 struct OctreeBuildOptions {
   uint32_t leaf = 4;      // a node with at most this many triangles becomes a leaf
-  int max_depth = 10;     // root = depth 0; at most kOctMaxLevel
+  int max_depth = 16;     // root = depth 0; at most kOctMaxLevel
+  // assign=exact: a split whose children hold more than this many times the
+  // node's references is not made (the node stays a leaf).
+  double max_growth = 2.0;
   OctreeAssign assign = OctreeAssign::Exact;
 };
 

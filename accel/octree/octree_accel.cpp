@@ -108,7 +108,8 @@ AcceleratorInfo octree_accelerator_info() {
       "octree",
       "regular octree over the bounding cube, exact SAT assignment, parametric traversal (Revelles et al. 2000)",
       {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
-       {"max_depth", "10", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)"},
+       {"max_depth", "16", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)"},
+       {"growth", "2", "assign=exact: no split whose children hold more than growth x the node's references, in [1, 8] (coplanar or touching faces would otherwise split to max_depth)"},
        {"assign", "exact", "exact (every leaf the triangle overlaps, SAT) or straddle (triangles crossing a "
                            "dividing plane stay at the inner node, each stored once)"},
        {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
@@ -124,6 +125,8 @@ AcceleratorInfo octree_accelerator_info() {
         if (!p.given("max_depth") && p.str("storage") == "linear") opt.build.max_depth = 6;
         if (opt.build.max_depth < 0 || opt.build.max_depth > kOctMaxLevel)
           throw SpecError(fmt::format("octree: max_depth must be in 0..{}", kOctMaxLevel));
+        opt.build.max_growth = p.real("growth");
+        if (!(opt.build.max_growth >= 1.0 && opt.build.max_growth <= 8.0)) throw SpecError("octree: growth must be in [1, 8]");
         opt.build.assign = p.choice("assign", {"exact", "straddle"}) == "straddle" ? OctreeAssign::Straddle
                                                                                    : OctreeAssign::Exact;
         const std::string& storage = p.choice("storage", {"pointer", "linear", "hash"});

@@ -1,0 +1,132 @@
+#include "accel/loose_octree/build_loose_octree.h"
+
+#include <array>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+namespace raylab {
+
+namespace {
+
+constexpr size_t kParallelRefs = 2048;
+
+struct TmpNode {
+  std::vector<uint32_t> refs;
+  std::unique_ptr<std::array<TmpNode, 8>> kids;
+  bool nonempty = false;
+};
+
+class LooseBuilder {
+ public:
+  LooseBuilder(const LooseOctreeOptions& opt, const LooseBoxes& boxes, const std::vector<Aabb>& tri_boxes)
+      : opt_(opt), boxes_(boxes), tri_boxes_(tri_boxes) {}
+
+  void build(TmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
+    if (ids.size() <= opt_.leaf || level >= opt_.max_depth) {
+      n.nonempty = !ids.empty();
+      n.refs = std::move(ids);
+      return;
+    }
+    const uint32_t half = OctreeCube::span(level + 1);
+    float mid[3];
+    for (int k = 0; k < 3; ++k) mid[k] = boxes_.cube.plane(k, c[k] + half);
+    std::array<std::vector<uint32_t>, 8> child_ids;
+    float lo[8][3], hi[8][3];
+    for (uint32_t ch = 0; ch < 8; ++ch) {
+      const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
+                              c[2] + ((ch & 4u) ? half : 0u)};
+      boxes_.box(level + 1, cc, lo[ch], hi[ch]);
+    }
+    for (const uint32_t id : ids) {
+      const Aabb& b = tri_boxes_[id];
+      const Vec3f centre = b.center();
+      const uint32_t ch = (centre.x() >= mid[0] ? 1u : 0u) | (centre.y() >= mid[1] ? 2u : 0u) |
+                          (centre.z() >= mid[2] ? 4u : 0u);
+      bool fits = true;
+      for (int k = 0; k < 3; ++k) fits = fits && b.lo[k] >= lo[ch][k] && b.hi[k] <= hi[ch][k];
+      if (fits) child_ids[ch].push_back(id);
+      else n.refs.push_back(id);
+    }
+    const size_t total = ids.size();
+    std::vector<uint32_t>().swap(ids);
+    n.kids = std::make_unique<std::array<TmpNode, 8>>();
+    auto build_child = [&](uint32_t ch) {
+      const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
+                              c[2] + ((ch & 4u) ? half : 0u)};
+      build((*n.kids)[ch], std::move(child_ids[ch]), level + 1, cc);
+    };
+    if (total >= kParallelRefs) tbb::parallel_for(0u, 8u, [&](uint32_t ch) { build_child(ch); });
+    else
+      for (uint32_t ch = 0; ch < 8; ++ch) build_child(ch);
+    n.nonempty = !n.refs.empty();
+    bool any_child = false;
+    for (const TmpNode& k : *n.kids) any_child = any_child || k.nonempty;
+    n.nonempty = n.nonempty || any_child;
+    if (!any_child) n.kids.reset();  // every triangle stayed: a leaf after all
+  }
+
+ private:
+  LooseOctreeOptions opt_;
+  const LooseBoxes& boxes_;
+  const std::vector<Aabb>& tri_boxes_;
+};
+
+void flatten(const TmpNode& root, OctreeTree& tree) {
+  std::vector<std::pair<const TmpNode*, uint32_t>> stack{{&root, 0u}};
+  tree.nodes.assign(1, OctreeNode{});
+  while (!stack.empty()) {
+    const auto [tmp, index] = stack.back();
+    stack.pop_back();
+    if (tmp->refs.size() > kOctMaxNodeRefs)
+      throw std::length_error(fmt::format("loose_octree: a node holds {} triangles, at most {} supported",
+                                          tmp->refs.size(), kOctMaxNodeRefs));
+    OctreeNode n;
+    n.first_ref = static_cast<uint32_t>(tree.refs.size());
+    tree.refs.insert(tree.refs.end(), tmp->refs.begin(), tmp->refs.end());
+    uint32_t mask = 0;
+    if (tmp->kids) {
+      n.first_child = static_cast<uint32_t>(tree.nodes.size());
+      tree.nodes.resize(tree.nodes.size() + 8);
+      for (uint32_t ch = 0; ch < 8; ++ch)
+        if ((*tmp->kids)[ch].nonempty) mask |= 1u << ch;
+      for (uint32_t ch = 8; ch-- > 0;) stack.emplace_back(&(*tmp->kids)[ch], n.first_child + ch);
+    }
+    n.meta = OctreeNode::make_meta(static_cast<uint32_t>(tmp->refs.size()), mask);
+    tree.nodes[index] = n;
+  }
+}
+
+}  // namespace
+
+OctreeTree build_loose_octree(const TriangleMesh& mesh, const LooseOctreeOptions& opt, LooseBoxes& boxes) {
+  OctreeTree tree;
+  tree.depth_limit = opt.max_depth;
+  const size_t n = mesh.num_triangles();
+  if (n > UINT32_MAX) throw std::length_error("loose_octree: more than 2^32 triangles");
+  std::vector<Aabb> tri_boxes(n);
+  Aabb bounds;
+  for (size_t i = 0; i < n; ++i) {
+    tri_boxes[i] = mesh.triangle_bounds(i);
+    bounds.extend(tri_boxes[i]);
+  }
+  boxes.grow_per_unit = static_cast<float>(0.5 * (opt.looseness - 1.0));
+  if (n == 0) {
+    tree.nodes.assign(1, OctreeNode{});
+    return tree;
+  }
+  tree.cube = octree_cube_around(bounds);
+  boxes.cube = tree.cube;
+  std::vector<uint32_t> ids(n);
+  for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
+  TmpNode root;
+  const uint32_t origin[3] = {0, 0, 0};
+  LooseBuilder(opt, boxes, tri_boxes).build(root, std::move(ids), 0, origin);
+  flatten(root, tree);
+  return tree;
+}
+
+}  // namespace raylab

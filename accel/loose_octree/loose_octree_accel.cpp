@@ -1,0 +1,90 @@
+#include "accel/loose_octree/loose_octree_accel.h"
+
+#include <fmt/format.h>
+
+#include "accel/core/batch_accelerator.h"
+#include "accel/core/triangle_test_param.h"
+#include "accel/loose_octree/build_loose_octree.h"
+#include "accel/loose_octree/traverse_loose_octree.h"
+
+namespace raylab {
+
+namespace {
+
+class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
+ public:
+  LooseOctreeAccel(const LooseOctreeOptions& opt, TriangleTest test) : BatchAccelerator(test), opt_(opt) {}
+
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    return traverse_loose_octree<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+
+ protected:
+  BuildStats build_impl(const TriangleMesh& mesh) override {
+    LooseBoxes boxes;
+    OctreeTree tree = build_loose_octree(mesh, opt_, boxes);
+    const OctreeShape shape = measure_octree(tree);
+    nodes_ = std::move(tree.nodes);
+    // One reference per triangle: the triangles themselves in node order.
+    tris_ = copy_leaf_triangles(mesh, tree.refs);
+    view_ = LooseOctreeView{nodes_.data(), boxes, tris_.data(), mesh.num_triangles() == 0};
+
+    BuildStats s;
+    const double n = static_cast<double>(mesh.num_triangles());
+    s.nodes = shape.nodes;
+    s.leaves = shape.leaves;
+    s.max_depth = shape.max_depth;
+    s.avg_depth = shape.avg_leaf_depth;
+    s.bytes = nodes_.size() * sizeof(OctreeNode) + tris_.size() * sizeof(LeafTriangle);
+    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
+    s.extra["references"] = static_cast<double>(shape.references);
+    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
+    s.extra["inner_references"] = static_cast<double>(shape.inner_references);
+    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
+    s.extra["looseness"] = opt_.looseness;
+    return s;
+  }
+
+ private:
+  LooseOctreeOptions opt_;
+  std::vector<OctreeNode> nodes_;
+  std::vector<LeafTriangle> tris_;
+  LooseOctreeView view_;
+};
+
+}  // namespace
+
+AcceleratorInfo loose_octree_accelerator_info() {
+  AcceleratorInfo info{
+      "loose_octree",
+      "loose octree (Ulrich 2000): node boxes grown by k, each triangle once at the deepest node containing it, "
+      "children walked by entry distance",
+      {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)"},
+       {"leaf", "4", "a node with at most this many triangles keeps them (1..1000)"},
+       {"max_depth", "20", "depth limit, root = 0 (0..20)"},
+       triangle_test_param()},
+      [](const Params& p) -> std::unique_ptr<Accelerator> {
+        LooseOctreeOptions opt;
+        opt.looseness = p.real("k");
+        if (!(opt.looseness >= 1.0 && opt.looseness <= 4.0)) throw SpecError("loose_octree: k must be in [1, 4]");
+        const int leaf = p.integer("leaf");
+        if (leaf < 1 || leaf > 1000) throw SpecError("loose_octree: leaf must be in 1..1000");
+        opt.leaf = static_cast<uint32_t>(leaf);
+        opt.max_depth = p.integer("max_depth");
+        if (opt.max_depth < 0 || opt.max_depth > kOctMaxLevel)
+          throw SpecError(fmt::format("loose_octree: max_depth must be in 0..{}", kOctMaxLevel));
+        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p));
+      }};
+  info.caps.mt_variant = "tri=mt";
+  info.cover = {"loose_octree:k=1.25"};
+  info.stats = {{"inner_nodes", "inner nodes"},
+                {"references", "triangle references (= triangles: each stored once)"},
+                {"refs_per_triangle", "references per triangle (1 by construction)"},
+                {"inner_references", "triangles held by inner nodes"},
+                {"max_leaf_size", "largest node list, in triangles"},
+                {"looseness", "k in force"}};
+  return info;
+}
+
+}  // namespace raylab
