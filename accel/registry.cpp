@@ -10,6 +10,7 @@
 #include "accel/embree/embree_accel.h"
 #include "accel/kdtree/kdtree_accel.h"
 #include "accel/grid/grid_accels.h"
+#include "accel/hybrid/hybrid_accel.h"
 
 namespace raylab {
 
@@ -23,6 +24,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       grid_accelerator_info(),
       hashgrid_accelerator_info(),
       grid2_accelerator_info(),
+      hybrid_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)
