@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "accel/brute/brute_accel.h"
+#include "accel/bsp/bsp_accel.h"
 #include "accel/bvh/bvh_accel.h"
 #include "accel/embree/embree_accel.h"
 #include "accel/kdtree/kdtree_accel.h"
@@ -25,6 +26,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       hashgrid_accelerator_info(),
       grid2_accelerator_info(),
       hybrid_accelerator_info(),
+      bsp_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)

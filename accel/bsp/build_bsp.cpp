@@ -1,0 +1,246 @@
+#include "accel/bsp/build_bsp.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include <tbb/task_group.h>
+
+#include "accel/bsp/convex_polytope.h"
+#include "accel/core/sah_report.h"
+
+namespace raylab {
+
+namespace {
+
+constexpr uint32_t kKindKdop = 5;  // build-time only: a fixed non-axis direction (stored as general)
+constexpr uint32_t kKindTriangle = 6;  // build-time only: a triangle's plane (stored as general)
+
+struct TmpNode {
+  uint32_t kind = kBspLeaf;
+  Vec3f n = Vec3f::Zero();
+  float d = 0;
+  double area = 0;
+  std::unique_ptr<TmpNode> child[2];
+  std::vector<uint32_t> ids;  // leaves
+};
+
+struct Candidate {
+  double cost = std::numeric_limits<double>::infinity();
+  uint32_t kind = kBspLeaf;
+  Vec3f n = Vec3f::Zero();
+  float d = 0;
+};
+
+class Builder {
+ public:
+  Builder(const TriangleMesh& mesh, const BspBuildOptions& opt) : opt_(opt) {
+    v_.resize(mesh.num_triangles());
+    double mag = 0;
+    for (size_t i = 0; i < v_.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        v_[i][k] = mesh.vertex(i, k).cast<double>();
+        mag = std::max(mag, v_[i][k].cwiseAbs().maxCoeff());
+      }
+    tol_ = 1e-12 * mag;
+  }
+
+  std::unique_ptr<TmpNode> build(std::vector<uint32_t> ids, ConvexPolytope poly, int depth) const {
+    auto node = std::make_unique<TmpNode>();
+    node->area = poly.surface_area();
+    const size_t n = ids.size();
+    const double leaf_cost = opt_.intersection_cost * static_cast<double>(n);
+    Candidate best;
+    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(ids, poly, node->area);
+    if (!(best.cost < leaf_cost)) {
+      node->ids = std::move(ids);
+      return node;
+    }
+    std::vector<uint32_t> left, right;
+    partition(ids, best.n, best.d, left, right);
+    if (left.size() == n && right.size() == n) {  // no progress (cannot happen with a counted candidate)
+      node->ids = std::move(ids);
+      return node;
+    }
+    ids.clear();
+    ids.shrink_to_fit();
+    node->kind = best.kind;
+    node->n = best.n;
+    node->d = best.d;
+    auto parts = poly.split(best.n.cast<double>(), static_cast<double>(best.d));
+    poly = ConvexPolytope{};
+    if (n > 4096) {
+      tbb::task_group g;
+      g.run([&] { node->child[0] = build(std::move(left), std::move(parts.first), depth + 1); });
+      node->child[1] = build(std::move(right), std::move(parts.second), depth + 1);
+      g.wait();
+    } else {
+      node->child[0] = build(std::move(left), std::move(parts.first), depth + 1);
+      node->child[1] = build(std::move(right), std::move(parts.second), depth + 1);
+    }
+    return node;
+  }
+
+  int depth_limit_ = 0;
+
+ private:
+  double side_min(uint32_t id, const Vec3d& n, double d) const {
+    return std::min({n.dot(v_[id][0]), n.dot(v_[id][1]), n.dot(v_[id][2])}) - d;
+  }
+  double side_max(uint32_t id, const Vec3d& n, double d) const {
+    return std::max({n.dot(v_[id][0]), n.dot(v_[id][1]), n.dot(v_[id][2])}) - d;
+  }
+  // Exact side rule (see build_bsp.h): below when some vertex is below (or
+  // all lie in the plane), above when some vertex is above.
+  bool goes_below(double smin, double smax) const { return smin < tol_ || smax <= tol_; }
+  bool goes_above(double, double smax) const { return smax > tol_; }
+
+  void partition(const std::vector<uint32_t>& ids, const Vec3f& nf, float df, std::vector<uint32_t>& left,
+                 std::vector<uint32_t>& right) const {
+    const Vec3d n = nf.cast<double>();
+    const double d = df;
+    for (const uint32_t id : ids) {
+      const double smin = side_min(id, n, d), smax = side_max(id, n, d);
+      if (goes_below(smin, smax)) left.push_back(id);
+      if (goes_above(smin, smax)) right.push_back(id);
+    }
+  }
+
+  void consider(Candidate& best, const ConvexPolytope& poly, double area, uint32_t kind, const Vec3f& nf, float df,
+                size_t nl, size_t nr, size_t n) const {
+    if (nl == n && nr == n) return;
+    const auto [al, ar] = poly.split_areas(nf.cast<double>(), static_cast<double>(df));
+    double cost = opt_.traversal_cost +
+                  opt_.intersection_cost * (al * static_cast<double>(nl) + ar * static_cast<double>(nr)) / area;
+    if (nl == 0 || nr == 0) cost *= 1.0 - opt_.empty_bonus;
+    if (cost < best.cost) best = Candidate{cost, kind, nf, df};
+  }
+
+  Candidate find_split(const std::vector<uint32_t>& ids, const ConvexPolytope& poly, double area) const {
+    Candidate best;
+    const size_t n = ids.size();
+    const Vec3f* dirs = bsp_fixed_directions();
+    const int bins = std::max(2, opt_.bins);
+    std::vector<double> lo_s(n), hi_s(n);
+    std::vector<uint32_t> hist_min(bins), hist_max(bins);
+    for (int di = 0; di < opt_.directions; ++di) {
+      const Vec3f& uf = dirs[di];
+      const Vec3d u = uf.cast<double>();
+      double tri_lo = std::numeric_limits<double>::infinity(), tri_hi = -tri_lo;
+      for (size_t i = 0; i < n; ++i) {
+        lo_s[i] = side_min(ids[i], u, 0.0);
+        hi_s[i] = side_max(ids[i], u, 0.0);
+        tri_lo = std::min(tri_lo, lo_s[i]);
+        tri_hi = std::max(tri_hi, hi_s[i]);
+      }
+      const auto [p_lo, p_hi] = poly.extent(u);
+      const double lo = std::max(p_lo, tri_lo), hi = std::min(p_hi, tri_hi);
+      if (!(hi > lo)) continue;
+      std::fill(hist_min.begin(), hist_min.end(), 0u);
+      std::fill(hist_max.begin(), hist_max.end(), 0u);
+      const double scale = bins / (hi - lo);
+      auto bin_of = [&](double s) { return std::clamp(static_cast<int>((s - lo) * scale), 0, bins - 1); };
+      for (size_t i = 0; i < n; ++i) {
+        hist_min[bin_of(lo_s[i])]++;
+        hist_max[bin_of(hi_s[i])]++;
+      }
+      // nl(b) = triangles starting below boundary b, nr(b) = ending above it.
+      size_t below = 0, above = n;
+      for (int b = 1; b < bins; ++b) {
+        below += hist_min[b - 1];
+        above -= hist_max[b - 1];
+        const float df = static_cast<float>(lo + (hi - lo) * b / bins);
+        consider(best, poly, area, di < 3 ? static_cast<uint32_t>(di) : kKindKdop, uf, df, below, above, n);
+      }
+    }
+    // Planes of the node's own triangles, counted exactly.
+    const size_t tries = std::min<size_t>(static_cast<size_t>(std::max(0, opt_.triangle_planes)), n);
+    for (size_t k = 0; k < tries; ++k) {
+      const uint32_t id = ids[k * n / tries];
+      const Vec3d nd = (v_[id][1] - v_[id][0]).cross(v_[id][2] - v_[id][0]);
+      if (!(nd.squaredNorm() > 0) || !std::isfinite(nd.squaredNorm())) continue;
+      const Vec3f nf = nd.normalized().cast<float>();
+      const float df = static_cast<float>(nf.cast<double>().dot(v_[id][0]));
+      const Vec3d nn = nf.cast<double>();
+      size_t nl = 0, nr = 0;
+      for (const uint32_t j : ids) {
+        const double smin = side_min(j, nn, df), smax = side_max(j, nn, df);
+        nl += goes_below(smin, smax);
+        nr += goes_above(smin, smax);
+      }
+      consider(best, poly, area, kKindTriangle, nf, df, nl, nr, n);
+    }
+    return best;
+  }
+
+  BspBuildOptions opt_;
+  std::vector<std::array<Vec3d, 3>> v_;
+  double tol_ = 0;
+};
+
+// Depth-first flattening into child pairs; gathers the statistics.
+void flatten(const TmpNode& t, uint32_t at, int depth, BspTree& out, BspBuildStats& s, double root_area) {
+  s.max_depth = std::max(s.max_depth, depth);
+  if (t.kind == kBspLeaf) {
+    out.nodes[at] = BspNode::leaf(static_cast<uint32_t>(out.prim_ids.size()), static_cast<uint32_t>(t.ids.size()));
+    out.prim_ids.insert(out.prim_ids.end(), t.ids.begin(), t.ids.end());
+    s.leaves++;
+    s.empty_leaves += t.ids.empty();
+    s.references += t.ids.size();
+    s.max_leaf = std::max(s.max_leaf, t.ids.size());
+    s.leaf_depth_sum += depth;
+    s.sah_cost += kSahReportIntersectionCost * t.area * static_cast<double>(t.ids.size()) / root_area;
+    return;
+  }
+  s.sah_cost += kSahReportTraversalCost * t.area / root_area;
+  const uint32_t pair = static_cast<uint32_t>(out.nodes.size());
+  out.nodes.resize(out.nodes.size() + 2);
+  const uint32_t stored = t.kind <= 2 ? t.kind : kBspGeneral;
+  s.axis_nodes += t.kind <= 2;
+  s.kdop_nodes += t.kind == kKindKdop;
+  s.triangle_plane_nodes += t.kind == kKindTriangle;
+  const float normal[3] = {t.n.x(), t.n.y(), t.n.z()};
+  out.nodes[at] = BspNode::inner(stored, normal, t.d, pair);
+  flatten(*t.child[0], pair, depth + 1, out, s, root_area);
+  flatten(*t.child[1], pair + 1, depth + 1, out, s, root_area);
+}
+
+}  // namespace
+
+const Vec3f* bsp_fixed_directions() {
+  // The axes, then the 26-DOP's body diagonals and face diagonals.
+  static const std::array<Vec3f, 13> table = [] {
+    std::array<Vec3f, 13> d;
+    d[0] = Vec3f::UnitX(), d[1] = Vec3f::UnitY(), d[2] = Vec3f::UnitZ();
+    const Vec3d diag[10] = {{1, 1, 1}, {1, 1, -1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 0},
+                            {1, -1, 0}, {1, 0, 1}, {1, 0, -1}, {0, 1, 1}, {0, 1, -1}};
+    for (int i = 0; i < 10; ++i) d[3 + i] = diag[i].normalized().cast<float>();
+    return d;
+  }();
+  return table.data();
+}
+
+BspTree build_bsp(const TriangleMesh& mesh, const BspBuildOptions& options, BspBuildStats* stats) {
+  BspTree out;
+  BspBuildStats s;
+  out.bounds = mesh.bounds();
+  const size_t n = mesh.num_triangles();
+  Builder b(mesh, options);
+  const int auto_depth = static_cast<int>(std::lround(8.0 + 1.3 * std::log2(static_cast<double>(std::max<size_t>(n, 1)))));
+  b.depth_limit_ = std::min(kBspMaxDepthLimit, options.max_depth < 0 ? auto_depth : options.max_depth);
+  s.depth_limit = b.depth_limit_;
+  std::vector<uint32_t> ids(n);
+  for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
+  ConvexPolytope root;
+  if (n > 0) root = ConvexPolytope::box(out.bounds.lo.cast<double>(), out.bounds.hi.cast<double>());
+  // A flat scene box has zero volume; its faces still give the SAH an area.
+  const std::unique_ptr<TmpNode> tree = b.build(std::move(ids), std::move(root), 0);
+  out.nodes.resize(1);
+  flatten(*tree, 0, 0, out, s, tree->area > 0 ? tree->area : 1.0);
+  if (stats) *stats = s;
+  return out;
+}
+
+}  // namespace raylab
