@@ -42,6 +42,24 @@ TEST(ConvexPolytope, SplitAreasAreExact) {
   }
 }
 
+// Areas without building the parts agree with the parts' areas after many
+// slanted splits (the cap faces must keep the faces' common orientation).
+TEST(ConvexPolytope, SplitAreasAgreeWithSplitsAtDepth) {
+  Pcg32 rng(9, 9);
+  ConvexPolytope p = ConvexPolytope::box(Vec3d(-1, -2, -3), Vec3d(4, 3, 2));
+  for (int i = 0; i < 25; ++i) {
+    const Vec3d n = test::random_direction(rng).cast<double>().normalized();
+    const auto [lo, hi] = p.extent(n);
+    const double d = lo + (0.2 + 0.6 * rng.uniform()) * (hi - lo);
+    const auto [al, ar] = p.split_areas(n, d);
+    auto parts = p.split(n, d);
+    ASSERT_NEAR(al, parts.first.surface_area(), 1e-9 * (al + 1)) << i;
+    ASSERT_NEAR(ar, parts.second.surface_area(), 1e-9 * (ar + 1)) << i;
+    EXPECT_LT(al, p.surface_area());
+    p = (i % 2) ? std::move(parts.first) : std::move(parts.second);
+  }
+}
+
 TEST(ConvexPolytope, DegeneratePolytopes) {
   // A flat box (zero volume): its two faces carry the area.
   const ConvexPolytope flat = ConvexPolytope::box(Vec3d(0, 0, 2), Vec3d(1, 1, 2));

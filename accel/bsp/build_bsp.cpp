@@ -34,6 +34,27 @@ struct Candidate {
   float d = 0;
 };
 
+// The node's triangle references, each with the part of its triangle that
+// lies in the node's region (the triangle clipped by the planes above it,
+// Sutherland-Hodgman), so counts and assignments see only what is really in
+// the region (the BSP form of the k-d tree's perfect splits).
+struct RefSet {
+  std::vector<uint32_t> ids;
+  std::vector<uint32_t> start{0};  // polygon i = pts[start[i] .. start[i + 1])
+  std::vector<Vec3d> pts;
+
+  size_t size() const { return ids.size(); }
+  void add(uint32_t id, const Vec3d* p, size_t k) {
+    ids.push_back(id);
+    pts.insert(pts.end(), p, p + k);
+    start.push_back(static_cast<uint32_t>(pts.size()));
+  }
+};
+
+// Clipped polygons longer than this keep their parent's polygon (unclipped,
+// conservative); a triangle in a convex region rarely has more than 8.
+constexpr size_t kMaxClippedVertices = 24;
+
 class Builder {
  public:
   Builder(const TriangleMesh& mesh, const BspBuildOptions& opt) : opt_(opt) {
@@ -47,25 +68,32 @@ class Builder {
     tol_ = 1e-12 * mag;
   }
 
-  std::unique_ptr<TmpNode> build(std::vector<uint32_t> ids, ConvexPolytope poly, int depth) const {
+  RefSet root_refs() const {
+    RefSet r;
+    r.ids.reserve(v_.size());
+    r.pts.reserve(3 * v_.size());
+    for (size_t i = 0; i < v_.size(); ++i) r.add(static_cast<uint32_t>(i), v_[i].data(), 3);
+    return r;
+  }
+
+  std::unique_ptr<TmpNode> build(RefSet refs, ConvexPolytope poly, int depth) const {
     auto node = std::make_unique<TmpNode>();
     node->area = poly.surface_area();
-    const size_t n = ids.size();
+    const size_t n = refs.size();
     const double leaf_cost = opt_.intersection_cost * static_cast<double>(n);
     Candidate best;
-    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(ids, poly, node->area);
+    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(refs, poly, node->area);
     if (!(best.cost < leaf_cost)) {
-      node->ids = std::move(ids);
+      node->ids = std::move(refs.ids);
       return node;
     }
-    std::vector<uint32_t> left, right;
-    partition(ids, best.n, best.d, left, right);
+    RefSet left, right;
+    partition(refs, best.n, best.d, left, right);
     if (left.size() == n && right.size() == n) {  // no progress (cannot happen with a counted candidate)
-      node->ids = std::move(ids);
+      node->ids = std::move(refs.ids);
       return node;
     }
-    ids.clear();
-    ids.shrink_to_fit();
+    refs = RefSet{};
     node->kind = best.kind;
     node->n = best.n;
     node->d = best.d;
@@ -86,25 +114,62 @@ class Builder {
   int depth_limit_ = 0;
 
  private:
-  double side_min(uint32_t id, const Vec3d& n, double d) const {
-    return std::min({n.dot(v_[id][0]), n.dot(v_[id][1]), n.dot(v_[id][2])}) - d;
+  void side_range(const RefSet& r, size_t i, const Vec3d& n, double d, double& smin, double& smax) const {
+    smin = std::numeric_limits<double>::infinity();
+    smax = -smin;
+    for (uint32_t k = r.start[i]; k < r.start[i + 1]; ++k) {
+      const double s = n.dot(r.pts[k]) - d;
+      smin = std::min(smin, s);
+      smax = std::max(smax, s);
+    }
   }
-  double side_max(uint32_t id, const Vec3d& n, double d) const {
-    return std::max({n.dot(v_[id][0]), n.dot(v_[id][1]), n.dot(v_[id][2])}) - d;
-  }
-  // Exact side rule (see build_bsp.h): below when some vertex is below (or
-  // all lie in the plane), above when some vertex is above.
-  bool goes_below(double smin, double smax) const { return smin < tol_ || smax <= tol_; }
+  // Exact side rule (see build_bsp.h), on the clipped polygon: below when it
+  // reaches below the plane or lies in it, above when it reaches above.
+  bool goes_below(double smin, double smax) const { return smax <= tol_ || smin < -tol_; }
   bool goes_above(double, double smax) const { return smax > tol_; }
 
-  void partition(const std::vector<uint32_t>& ids, const Vec3f& nf, float df, std::vector<uint32_t>& left,
-                 std::vector<uint32_t>& right) const {
+  void partition(const RefSet& refs, const Vec3f& nf, float df, RefSet& left, RefSet& right) const {
     const Vec3d n = nf.cast<double>();
     const double d = df;
-    for (const uint32_t id : ids) {
-      const double smin = side_min(id, n, d), smax = side_max(id, n, d);
-      if (goes_below(smin, smax)) left.push_back(id);
-      if (goes_above(smin, smax)) right.push_back(id);
+    Vec3d below[kMaxClippedVertices], above[kMaxClippedVertices];
+    for (size_t i = 0; i < refs.size(); ++i) {
+      double smin, smax;
+      side_range(refs, i, n, d, smin, smax);
+      const uint32_t id = refs.ids[i];
+      const Vec3d* p = refs.pts.data() + refs.start[i];
+      const size_t k = refs.start[i + 1] - refs.start[i];
+      const bool b = goes_below(smin, smax), a = goes_above(smin, smax);
+      if (b && !a) {
+        left.add(id, p, k);
+      } else if (a && !b) {
+        right.add(id, p, k);
+      } else {
+        // Straddles: each side gets its part (vertices within tol count as on the plane).
+        size_t nb = 0, na = 0;
+        bool overflow = false;
+        for (size_t j = 0; j < k && !overflow; ++j) {
+          const Vec3d& u = p[j];
+          const Vec3d& w = p[(j + 1) % k];
+          const double su = n.dot(u) - d, sw = n.dot(w) - d;
+          const bool u_on = std::fabs(su) <= tol_;
+          if (nb + 2 > kMaxClippedVertices || na + 2 > kMaxClippedVertices) overflow = true;
+          if (overflow) break;
+          if (su <= tol_) below[nb++] = u;
+          if (su >= -tol_) above[na++] = u;
+          if (!u_on && std::fabs(sw) > tol_ && ((su < 0) != (sw < 0))) {
+            const Vec3d x = u + (su / (su - sw)) * (w - u);
+            below[nb++] = x;
+            above[na++] = x;
+          }
+        }
+        if (overflow || nb == 0 || na == 0) {
+          left.add(id, p, k);
+          right.add(id, p, k);
+        } else {
+          left.add(id, below, nb);
+          right.add(id, above, na);
+        }
+      }
     }
   }
 
@@ -118,9 +183,9 @@ class Builder {
     if (cost < best.cost) best = Candidate{cost, kind, nf, df};
   }
 
-  Candidate find_split(const std::vector<uint32_t>& ids, const ConvexPolytope& poly, double area) const {
+  Candidate find_split(const RefSet& refs, const ConvexPolytope& poly, double area) const {
     Candidate best;
-    const size_t n = ids.size();
+    const size_t n = refs.size();
     const Vec3f* dirs = bsp_fixed_directions();
     const int bins = std::max(2, opt_.bins);
     std::vector<double> lo_s(n), hi_s(n);
@@ -130,8 +195,7 @@ class Builder {
       const Vec3d u = uf.cast<double>();
       double tri_lo = std::numeric_limits<double>::infinity(), tri_hi = -tri_lo;
       for (size_t i = 0; i < n; ++i) {
-        lo_s[i] = side_min(ids[i], u, 0.0);
-        hi_s[i] = side_max(ids[i], u, 0.0);
+        side_range(refs, i, u, 0.0, lo_s[i], hi_s[i]);
         tri_lo = std::min(tri_lo, lo_s[i]);
         tri_hi = std::max(tri_hi, hi_s[i]);
       }
@@ -158,15 +222,16 @@ class Builder {
     // Planes of the node's own triangles, counted exactly.
     const size_t tries = std::min<size_t>(static_cast<size_t>(std::max(0, opt_.triangle_planes)), n);
     for (size_t k = 0; k < tries; ++k) {
-      const uint32_t id = ids[k * n / tries];
+      const uint32_t id = refs.ids[k * n / tries];
       const Vec3d nd = (v_[id][1] - v_[id][0]).cross(v_[id][2] - v_[id][0]);
       if (!(nd.squaredNorm() > 0) || !std::isfinite(nd.squaredNorm())) continue;
       const Vec3f nf = nd.normalized().cast<float>();
       const float df = static_cast<float>(nf.cast<double>().dot(v_[id][0]));
       const Vec3d nn = nf.cast<double>();
       size_t nl = 0, nr = 0;
-      for (const uint32_t j : ids) {
-        const double smin = side_min(j, nn, df), smax = side_max(j, nn, df);
+      for (size_t j = 0; j < n; ++j) {
+        double smin, smax;
+        side_range(refs, j, nn, df, smin, smax);
         nl += goes_below(smin, smax);
         nr += goes_above(smin, smax);
       }
@@ -231,12 +296,10 @@ BspTree build_bsp(const TriangleMesh& mesh, const BspBuildOptions& options, BspB
   const int auto_depth = static_cast<int>(std::lround(8.0 + 1.3 * std::log2(static_cast<double>(std::max<size_t>(n, 1)))));
   b.depth_limit_ = std::min(kBspMaxDepthLimit, options.max_depth < 0 ? auto_depth : options.max_depth);
   s.depth_limit = b.depth_limit_;
-  std::vector<uint32_t> ids(n);
-  for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
   ConvexPolytope root;
   if (n > 0) root = ConvexPolytope::box(out.bounds.lo.cast<double>(), out.bounds.hi.cast<double>());
   // A flat scene box has zero volume; its faces still give the SAH an area.
-  const std::unique_ptr<TmpNode> tree = b.build(std::move(ids), std::move(root), 0);
+  const std::unique_ptr<TmpNode> tree = b.build(b.root_refs(), std::move(root), 0);
   out.nodes.resize(1);
   flatten(*tree, 0, 0, out, s, tree->area > 0 ? tree->area : 1.0);
   if (stats) *stats = s;

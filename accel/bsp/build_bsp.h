@@ -12,11 +12,15 @@
 //    leaf hug slanted geometry, the paper's point.
 // Each candidate is priced by the SAH with the exact surface areas of the two
 // child polytopes (convex_polytope.h), not of boxes; the cheapest wins if it
-// beats making a leaf. Triangles are then assigned by exact plane-side tests
-// in double precision on the stored (float) plane: below when a vertex lies
-// below, above when one lies above; coplanar triangles go below. A triangle
-// that meets a leaf's region is therefore in that leaf (the traversal's
-// margins cover the remaining double rounding).
+// beats making a leaf. Every triangle reference carries the part of its
+// triangle inside the node's region (clipped by the planes above it, the BSP
+// form of the k-d tree's perfect splits), so counts and assignments see only
+// what really lies in the region: a reference goes below when its part
+// reaches below the plane or lies in it, above when it reaches above, both
+// (each with its clipped part) when it straddles. Side tests are done in
+// double precision on the stored (float) plane with a tolerance of 1e-12 of
+// the scene's magnitude; the traversal's margins are orders of magnitude
+// wider, so a triangle that meets a leaf's region is always found there.
 //
 // Cost: O(N (directions + triangle_planes)) per level plus a constant number
 // of polytope clips per node, so O(N log N) for a balanced tree; the depth is

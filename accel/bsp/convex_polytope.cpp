@@ -121,7 +121,12 @@ std::pair<ConvexPolytope, ConvexPolytope> ConvexPolytope::split(const Vec3d& n, 
   }
   std::vector<Vec3d> c = order_cap(std::move(cap), n);
   if (!c.empty()) {
+    // Faces keep one orientation (area vectors pointing inward, as box()
+    // makes them) so the area vectors of a closed surface sum to zero, which
+    // split_areas relies on: inward is -n for the part below, +n above.
+    if (polygon_area_vector(c).dot(n) > 0) std::reverse(c.begin(), c.end());
     out.first.faces.push_back(c);
+    std::reverse(c.begin(), c.end());
     out.second.faces.push_back(std::move(c));
   }
   if (out.first.empty()) out.first.faces.clear();

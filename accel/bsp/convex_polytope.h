@@ -21,6 +21,7 @@
 namespace raylab {
 
 struct ConvexPolytope {
+  // Boundary polygons, all oriented the same way (area vectors inward).
   std::vector<std::vector<Vec3d>> faces;
 
   static ConvexPolytope box(const Vec3d& lo, const Vec3d& hi);
