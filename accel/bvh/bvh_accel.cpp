@@ -3,6 +3,7 @@
 // into:
 //
 //   builder=binned|sweep|sbvh|lbvh   opt=none|reinsert   layout=bvh2|bvh4|bvh8
+//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray packets)
 //
 // Every combination reports the same statistics: build ms, bytes, nodes,
 // leaves, depth and SAH cost of the traced structure (constants in
@@ -25,6 +26,7 @@
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/traverse_sphere_bvh.h"
+#include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/traverse_wide.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/triangle_test_param.h"
@@ -56,6 +58,7 @@ struct BvhConfig {
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
+  int packet = 0;  // 16: closest-hit batches as 16-ray packets (traverse_packet.h); bvh8 only
 };
 
 int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
@@ -102,10 +105,25 @@ class SphereKernel final : public BatchAccelerator<SphereKernel, Kernel> {
 // The wide layouts test triangles with the vectorised watertight test only.
 template <int N, int W>
 class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
+  using Batch = BatchAccelerator<WideKernel<N, W>, Kernel>;
+
  public:
-  explicit WideKernel(WideBvh<N, W> bvh)
-      : BatchAccelerator<WideKernel<N, W>, Kernel>(TriangleTest::Watertight), bvh_(std::move(bvh)) {
+  WideKernel(WideBvh<N, W> bvh, bool packets)
+      : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref};
+  }
+
+  // packet=16: uninstrumented closest-hit batches go through the packet
+  // tracer (same answers); counted batches take the single-ray kernel, whose
+  // counters mean what every structure's mean.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    if constexpr (N == 8) {
+      if (packets_ && !stats) {
+        PacketTracer<W>(view_).intersect(rays, hits);
+        return;
+      }
+    }
+    Batch::intersect(rays, hits, stats);
   }
 
   template <TriangleTest, bool kAnyHit, bool kCount>
@@ -116,12 +134,14 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
 
  private:
   WideBvh<N, W> bvh_;
+  bool packets_;
   WideView<N, W> view_;
 };
 
 template <int N, int W>
-std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, size_t& bytes) {
-  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh));
+std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
+                                         size_t& bytes) {
+  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh), packets);
   bytes = k->bytes();
   return k;
 }
@@ -272,14 +292,15 @@ class BvhAccel final : public Accelerator {
     if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
       throw std::runtime_error("bvh: tree too deep for the traversal stack");
     const int block = block_width();
+    const bool packets = cfg_.packet == kPacketSize;
     if (cfg_.layout == LayoutKind::Bvh4) {
-      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, bytes);
-      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, bytes);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, bytes);
     } else {
-      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, bytes);
-      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, bytes);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, bytes);
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
@@ -314,6 +335,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
        triangle_test_param("; mt with layout=bvh2 only"),
+       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)"},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
@@ -349,13 +371,16 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
           throw SpecError("bvh: ct and ci must be positive");
         c.tri = parse_triangle_test(p);
+        c.packet = p.integer("packet");
+        if (c.packet != 0 && c.packet != kPacketSize) throw SpecError("bvh: packet must be 0 or 16");
+        if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
           throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
         return std::make_unique<BvhAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt,layout=bvh2";
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
-                "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16",
+                "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
                 "bvh:bound=sphere", "bvh:bound=sphere,tri=mt"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
