@@ -96,7 +96,7 @@ TriangleMesh tilted_scene() {
   return m;
 }
 
-const char* const kBspSpecs[] = {"bsp", "bsp:dirs=3,tplanes=0", "bsp:dirs=7,tplanes=32,bins=4", "bsp:tplanes=64,ct=1,ci=1"};
+const char* const kBspSpecs[] = {"bsp", "bsp:dirs=3,tplanes=0", "bsp:dirs=7,tplanes=32,bins=4,ct=1,ci=1"};
 
 TEST(Bsp, AgreesWithBruteForceAtVerticesEdgesAndFromSurfaces) {
   const TriangleMesh mesh = tilted_scene();

@@ -157,8 +157,7 @@ AcceleratorInfo hybrid_accelerator_info() {
         return std::make_unique<EntryGridAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt";
-  info.cover = {"hybrid:inner=kdtree", "hybrid:inner=entry", "hybrid:tri=mt", "hybrid:inner=entry,tri=mt",
-                "hybrid:density=4,leaf=1"};
+  info.cover = {"hybrid:inner=kdtree", "hybrid:inner=entry", "hybrid:tri=mt"};
   info.stats = {{"top_cells", "cells of the top grid"},
                 {"res_x", "top grid cells along x"},
                 {"res_y", "top grid cells along y"},
