@@ -25,7 +25,9 @@ TEST(ProcessMemory, PeakFollowsATouchedAllocationAndResets) {
   ASSERT_GT(resident_bytes(), 0u);
   EXPECT_GE(peak_resident_bytes(), resident_bytes());
   // After a reset the peak is the current resident set (where supported).
-  if (reset_peak_resident()) EXPECT_LE(peak_resident_bytes(), resident_bytes() + (16u << 20));
+  if (reset_peak_resident()) {
+    EXPECT_LE(peak_resident_bytes(), resident_bytes() + (16u << 20));
+  }
   const size_t before = resident_bytes();
   constexpr size_t kBytes = 96u << 20;
   {
