@@ -99,6 +99,7 @@ class SphereKernel final : public BatchAccelerator<SphereKernel, Kernel> {
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_sphere_bvh<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { outline_sphere_bvh(bvh_, max_depth, out); }
 
  private:
   SphereBvh bvh_;

@@ -1,3 +1,5 @@
+#include <cmath>
+
 #include <tbb/parallel_for.h>
 
 #include "accel/bvh/traverse_sphere_bvh.h"
@@ -24,6 +26,38 @@ void gather_points(const HugePageVector<Bvh2Node>& nodes, const HugePageVector<L
 }
 
 }  // namespace
+
+void outline_sphere_bvh(const SphereBvh& bvh, int max_depth, StructureOutline& out) {
+  out.what = "bounding spheres (three great circles each)";
+  if (bvh.nodes.empty()) return;
+  struct Item {
+    uint32_t node;
+    int depth;
+  };
+  std::vector<Item> stack{{0, 0}};
+  constexpr int kSegments = 12;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    if (it.depth > max_depth) continue;
+    const SphereNode& n = bvh.nodes[it.node];
+    const Vec3f c(n.c[0], n.c[1], n.c[2]);
+    for (int axis = 0; axis < 3; ++axis) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int k = 0; k < kSegments; ++k) {
+        const float a0 = 2.0f * static_cast<float>(M_PI) * k / kSegments, a1 = 2.0f * static_cast<float>(M_PI) * (k + 1) / kSegments;
+        Vec3f p0 = c, p1 = c;
+        p0[u] += n.r * std::cos(a0), p0[v] += n.r * std::sin(a0);
+        p1[u] += n.r * std::cos(a1), p1[v] += n.r * std::sin(a1);
+        if (!out.add(OutlineSegment{p0, p1, it.depth})) return;
+      }
+    }
+    if (n.count == 0) {
+      stack.push_back({n.index + 1, it.depth + 1});
+      stack.push_back({n.index, it.depth + 1});
+    }
+  }
+}
 
 SphereBvh make_sphere_bvh(Bvh2Layout layout) {
   SphereBvh out;

@@ -17,6 +17,7 @@
 
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/sphere_bounds.h"
+#include "accel/structure_outline.h"
 
 namespace raylab {
 
@@ -45,6 +46,10 @@ struct SphereBvh {
 
 // Spheres for every node of `layout` (consumed: the triangles move over).
 SphereBvh make_sphere_bvh(Bvh2Layout layout);
+
+// Structure picture (Accelerator::outline): every node's sphere of depth <=
+// max_depth as three great circles (segments), leaves included.
+void outline_sphere_bvh(const SphereBvh& bvh, int max_depth, StructureOutline& out);
 
 struct SphereBvhView {
   const SphereNode* nodes = nullptr;
