@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "accel/brute/brute_accel.h"
+#include "accel/bsp/bsp_accel.h"
 #include "accel/bvh/bvh_accel.h"
 #include "accel/embree/embree_accel.h"
 #include "accel/kdtree/kdtree_accel.h"
@@ -13,6 +14,7 @@
 #include "accel/hgrid/hgrid_accel.h"
 #include "accel/loose_octree/loose_octree_accel.h"
 #include "accel/octree/octree_accel.h"
+#include "accel/hybrid/hybrid_accel.h"
 
 namespace raylab {
 
@@ -29,6 +31,8 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       octree_accelerator_info(),
       hgrid_accelerator_info(),
       loose_octree_accelerator_info(),
+      hybrid_accelerator_info(),
+      bsp_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)

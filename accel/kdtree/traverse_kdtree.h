@@ -57,6 +57,9 @@ struct KdTreeView {
   const uint32_t* ids = nullptr;  // leaf ranges [offset, offset + count) of indices into tris
   Aabb bounds;
   bool empty = true;
+  // The node the walk starts at and whose cell `bounds` is: the root, or an
+  // entry node of a subtree (accel/hybrid's entry-point grid).
+  uint32_t root = 0;
 };
 
 // The margin delta as a fraction of M (8 ulps of M).
@@ -131,7 +134,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   // One entry per inner node on the current path at most.
   Entry stack[kKdMaxDepthLimit];
   int sp = 0;
-  uint32_t node = 0;
+  uint32_t node = tree.root;
 
   while (true) {
     KdNode n = tree.nodes[node];

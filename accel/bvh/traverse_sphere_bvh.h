@@ -1,0 +1,137 @@
+#pragma once
+// The sphere hierarchy (`bvh:bound=sphere`): the binary BVH's tree (same
+// builder, same leaves, same child order) with a bounding sphere per node
+// instead of a box (sphere_bounds.h), traced front to back like
+// traverse_bvh2.h: both children's spheres are tested, the nearer entered
+// first, the farther pushed with its entry distance.
+//
+// The ray-sphere test is conservative: the squared distance from the centre
+// to the ray's line is computed from the component of (c - o) perpendicular
+// to the direction (no cancellation-prone quadratic), and the radius is
+// padded by 2^-16 of |c - o| + r, far above the few ulps that float rounding
+// of these products can lose; the entry and exit distances are padded the
+// same way. A sphere the ray really crosses is therefore never missed.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "accel/bvh/bvh2_layout.h"
+#include "accel/bvh/sphere_bounds.h"
+#include "accel/structure_outline.h"
+
+namespace raylab {
+
+struct SphereNode {
+  float c[3];
+  float r;
+  uint32_t index;  // inner: left child (right = index + 1); leaf: first triangle
+  uint32_t count;  // 0 for inner nodes
+};
+static_assert(sizeof(SphereNode) == 24);
+
+// How much looser the spheres are than the boxes of the same nodes.
+struct SphereLooseness {
+  double volume_ratio = 0.0;        // sum of sphere volumes / sum of box volumes
+  double area_ratio = 0.0;          // sum of sphere areas / sum of box areas
+  double mean_node_area_ratio = 0.0;  // mean over nodes of sphere area / box area
+};
+
+struct SphereBvh {
+  std::vector<SphereNode> nodes;
+  HugePageVector<LeafTriangle> tris;
+  SphereLooseness looseness;
+
+  size_t bytes() const { return nodes.size() * sizeof(SphereNode) + tris.size() * sizeof(LeafTriangle); }
+};
+
+// Spheres for every node of `layout` (consumed: the triangles move over).
+SphereBvh make_sphere_bvh(Bvh2Layout layout);
+
+// Structure picture (Accelerator::outline): every node's sphere of depth <=
+// max_depth as three great circles (segments), leaves included.
+void outline_sphere_bvh(const SphereBvh& bvh, int max_depth, StructureOutline& out);
+
+struct SphereBvhView {
+  const SphereNode* nodes = nullptr;
+  const LeafTriangle* tris = nullptr;
+  bool empty = true;
+};
+
+inline constexpr float kSpherePad = 0x1p-16f;
+
+// The ray against one sphere: entry distance when [tmin, tmax] overlaps the
+// (padded) chord.
+[[gnu::always_inline]] inline bool ray_sphere_test(const Ray& ray, float inv_dd, const SphereNode& s, float tmin,
+                                                   float tmax, float& t_enter) {
+  const Vec3f oc(s.c[0] - ray.org[0], s.c[1] - ray.org[1], s.c[2] - ray.org[2]);
+  const float tca = oc.dot(ray.dir) * inv_dd;  // closest approach
+  const Vec3f perp = oc - tca * ray.dir;
+  const float pad = kSpherePad * (oc.cwiseAbs().maxCoeff() + s.r);
+  const float rr = s.r + pad;
+  const float h2 = rr * rr - perp.squaredNorm();
+  if (!(h2 >= 0.0f)) return false;
+  const float half_chord = std::sqrt(h2 * inv_dd);
+  const float t_pad = kSpherePad * (std::fabs(tca) + half_chord);
+  t_enter = tca - half_chord - t_pad;
+  const float t_exit = tca + half_chord + t_pad;
+  return t_enter <= tmax && t_exit >= tmin;
+}
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_sphere_bvh(const SphereBvhView& bvh, const Ray& ray, TraversalStats* stats) {
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
+  if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
+  const TrianglePrecompute<kTest> pre(ray);
+  const float inv_dd = 1.0f / ray.dir.squaredNorm();
+  const float tmin = ray.tmin;
+  float bound = pad_far(rec.tmax());
+
+  struct Entry {
+    uint32_t node;
+    float t;
+  };
+  Entry stack[kBvh2StackSize];
+  int sp = 0;
+  float t_root;
+  rec.count_nodes(1);
+  if (!ray_sphere_test(ray, inv_dd, bvh.nodes[0], tmin, bound, t_root)) return rec.hit();
+  uint32_t node = 0;
+  while (true) {
+    const SphereNode& n = bvh.nodes[node];
+    if (n.count != 0) {
+      if (intersect_leaf(pre, ray, bvh.tris + n.index, n.count, rec)) {
+        if constexpr (kAnyHit) return rec.hit();
+        bound = pad_far(rec.tmax());
+      }
+    } else {
+      rec.count_nodes(2);
+      float tl, tr;
+      const bool hl = ray_sphere_test(ray, inv_dd, bvh.nodes[n.index], tmin, bound, tl);
+      const bool hr = ray_sphere_test(ray, inv_dd, bvh.nodes[n.index + 1], tmin, bound, tr);
+      if (hl && hr) {
+        uint32_t near = n.index, far = n.index + 1;
+        if (tr < tl) {
+          std::swap(near, far);
+          std::swap(tl, tr);
+        }
+        stack[sp++] = Entry{far, tr};
+        node = near;
+        continue;
+      }
+      if (hl || hr) {
+        node = hl ? n.index : n.index + 1;
+        continue;
+      }
+    }
+    while (true) {
+      if (sp == 0) return rec.hit();
+      const Entry e = stack[--sp];
+      if (e.t <= bound) {
+        node = e.node;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace raylab

@@ -1,0 +1,171 @@
+// General BSP tree (accel/bsp): exact polytope areas (planes through
+// vertices and edges, degenerate polytopes), agreement with brute force
+// (bit-identical distances) including rays lying in triangle planes (the
+// planes the builder splits on), rays through vertices and edges, and the
+// candidate-set parameters.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "accel/bsp/build_bsp.h"
+#include "accel/bsp/convex_polytope.h"
+#include "scenes/procedural.h"
+#include "tests/accel_agreement.h"
+
+namespace raylab {
+namespace {
+
+TEST(ConvexPolytope, SplitAreasAreExact) {
+  const ConvexPolytope cube = ConvexPolytope::box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  EXPECT_DOUBLE_EQ(cube.surface_area(), 6.0);
+  struct Case {
+    Vec3d n;
+    double d, below, above;
+  };
+  const double hex = 3.0 * std::sqrt(3.0) / 4.0;  // the cube's middle cross-section normal to (1,1,1)
+  const Case cases[] = {
+      {Vec3d(1, 0, 0), 0.25, 3.0, 5.0},  // x <= 0.25: two unit faces and four 0.25 x 1 strips
+      {Vec3d(1, 1, 1).normalized(), 1.5 / std::sqrt(3.0), 3.0 + hex, 3.0 + hex},
+      {Vec3d(1, 1, 1).normalized(), 0.0, 0.0, 6.0},                                      // through a vertex
+      {Vec3d(1, 1, 0).normalized(), 0.0, 0.0, 6.0},                                      // through an edge
+      {Vec3d(1, -1, 0).normalized(), 0.0, 3.0 + std::sqrt(2.0), 3.0 + std::sqrt(2.0)},  // through two edges
+      {Vec3d(0, 0, 1), 1.0, 6.0, 0.0},                                                   // along a face
+  };
+  for (size_t i = 0; i < std::size(cases); ++i) {
+    const Case& c = cases[i];
+    const auto [al, ar] = cube.split_areas(c.n, c.d);
+    const auto parts = cube.split(c.n, c.d);
+    EXPECT_NEAR(al, c.below, 1e-12) << "case " << i;
+    EXPECT_NEAR(ar, c.above, 1e-12) << "case " << i;
+    EXPECT_NEAR(parts.first.surface_area(), c.below, 1e-12) << "case " << i;
+    EXPECT_NEAR(parts.second.surface_area(), c.above, 1e-12) << "case " << i;
+  }
+}
+
+// Areas without building the parts agree with the parts' areas after many
+// slanted splits (the cap faces must keep the faces' common orientation).
+TEST(ConvexPolytope, SplitAreasAgreeWithSplitsAtDepth) {
+  Pcg32 rng(9, 9);
+  ConvexPolytope p = ConvexPolytope::box(Vec3d(-1, -2, -3), Vec3d(4, 3, 2));
+  for (int i = 0; i < 25; ++i) {
+    const Vec3d n = test::random_direction(rng).cast<double>().normalized();
+    const auto [lo, hi] = p.extent(n);
+    const double d = lo + (0.2 + 0.6 * rng.uniform()) * (hi - lo);
+    const auto [al, ar] = p.split_areas(n, d);
+    auto parts = p.split(n, d);
+    ASSERT_NEAR(al, parts.first.surface_area(), 1e-9 * (al + 1)) << i;
+    ASSERT_NEAR(ar, parts.second.surface_area(), 1e-9 * (ar + 1)) << i;
+    EXPECT_LT(al, p.surface_area());
+    p = (i % 2) ? std::move(parts.first) : std::move(parts.second);
+  }
+}
+
+TEST(ConvexPolytope, DegeneratePolytopes) {
+  // A flat box (zero volume): its two faces carry the area.
+  const ConvexPolytope flat = ConvexPolytope::box(Vec3d(0, 0, 2), Vec3d(1, 1, 2));
+  EXPECT_DOUBLE_EQ(flat.surface_area(), 2.0);
+  const auto [al, ar] = flat.split_areas(Vec3d(1, 0, 0), 0.5);
+  EXPECT_NEAR(al, 1.0, 1e-12);
+  EXPECT_NEAR(ar, 1.0, 1e-12);
+  // A sliver cut off a corner repeatedly stays finite and non-negative.
+  ConvexPolytope p = ConvexPolytope::box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  for (int i = 0; i < 30; ++i) {
+    p = p.split(Vec3d(1, 1, 1).normalized(), std::ldexp(1.0, -i)).first;
+    const double a = p.surface_area();
+    ASSERT_TRUE(std::isfinite(a) && a >= 0.0) << i;
+  }
+  // Splitting an empty polytope gives two empty ones.
+  const auto e = ConvexPolytope{}.split(Vec3d(1, 0, 0), 0.0);
+  EXPECT_TRUE(e.first.empty() && e.second.empty());
+}
+
+// A tilted, finely tessellated surface (shared vertices and edges) plus a soup.
+TriangleMesh tilted_scene() {
+  TriangleMesh m = make_triangle_soup(300, 4).mesh;
+  const int k = 12;
+  const Vec3f ex = Vec3f(1, 0.3f, 0.2f), ey = Vec3f(-0.2f, 0.4f, 1.0f), o(-0.5f, -0.3f, -0.4f);
+  const uint32_t base = static_cast<uint32_t>(m.vertices.size());
+  for (int j = 0; j <= k; ++j)
+    for (int i = 0; i <= k; ++i) m.vertices.push_back(o + (static_cast<float>(i) / k) * ex + (static_cast<float>(j) / k) * ey);
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const uint32_t a = base + j * (k + 1) + i, b = a + 1, c = a + k + 1, d = c + 1;
+      m.triangles.push_back({a, b, d});
+      m.triangles.push_back({a, d, c});
+    }
+  return m;
+}
+
+const char* const kBspSpecs[] = {"bsp", "bsp:dirs=3,tplanes=0", "bsp:dirs=7,tplanes=32,bins=4,ct=1,ci=1"};
+
+TEST(Bsp, AgreesWithBruteForceAtVerticesEdgesAndFromSurfaces) {
+  const TriangleMesh mesh = tilted_scene();
+  const auto rays = test::rays_at_triangles(mesh, 1500, 12);
+  const auto secondary = test::secondary_rays(mesh, rays, 13);
+  for (const char* spec : kBspSpecs) {
+    auto a = make_accelerator(spec);
+    a->build(mesh);
+    std::string first;
+    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, rays, &first), 0u) << spec << ": " << first;
+    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, secondary, &first), 0u) << spec << ": " << first;
+  }
+}
+
+// Rays lying in triangle planes (the split planes of triangle-plane nodes):
+// from a vertex along an edge or towards the opposite edge's midpoint, both
+// directions, and one ulp beside.
+TEST(Bsp, RaysLyingInSplitPlanes) {
+  const TriangleMesh mesh = tilted_scene();
+  std::vector<Ray> rays;
+  for (size_t t = 0; t < mesh.num_triangles(); t += 3) {
+    const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+    for (const Vec3f& d : {Vec3f(b - a), Vec3f(0.5f * (b + c) - a), Vec3f(a - b)}) {
+      rays.emplace_back(a - d, d);
+      rays.emplace_back(a, d, 0.0f);
+      Vec3f o = a - 2.0f * d;
+      o.x() = std::nextafter(o.x(), 1e30f);
+      rays.emplace_back(o, d);
+    }
+  }
+  BspBuildStats st;
+  build_bsp(mesh, BspBuildOptions{}, &st);
+  EXPECT_GT(st.triangle_plane_nodes, 0u);
+  for (const char* spec : kBspSpecs) {
+    auto acc = make_accelerator(spec);
+    acc->build(mesh);
+    std::string first;
+    EXPECT_EQ(test::count_brute_mismatches(*acc, mesh, rays, &first), 0u) << spec << ": " << first;
+  }
+}
+
+TEST(Bsp, CandidateSetsAndStatistics) {
+  const TriangleMesh mesh = tilted_scene();
+  BspBuildStats axes, full;
+  BspBuildOptions o;
+  o.directions = 3;
+  o.triangle_planes = 0;
+  const BspTree t = build_bsp(mesh, o, &axes);
+  EXPECT_EQ(axes.kdop_nodes + axes.triangle_plane_nodes, 0u);
+  EXPECT_GT(axes.axis_nodes, 0u);
+  for (const auto& n : t.nodes) EXPECT_NE(n.kind(), kBspGeneral);
+  build_bsp(mesh, BspBuildOptions{}, &full);
+  EXPECT_GT(full.kdop_nodes + full.triangle_plane_nodes, 0u);
+  EXPECT_GE(full.references, mesh.num_triangles());
+  EXPECT_LE(full.max_depth, full.depth_limit);
+  auto a = make_accelerator("bsp");
+  const BuildStats s = a->build(mesh);
+  EXPECT_GT(s.nodes, 1u);
+  EXPECT_GT(s.sah_cost, 0.0);
+  EXPECT_GE(s.extra.at("refs_per_triangle"), 1.0);
+  EXPECT_THROW(make_accelerator("bsp:dirs=5"), SpecError);
+  EXPECT_THROW(make_accelerator("bsp:bins=1"), SpecError);
+  EXPECT_THROW(make_accelerator("bsp:tplanes=-1"), SpecError);
+  // Depth 0: one leaf holding everything, still correct.
+  auto leaf = make_accelerator("bsp:max_depth=0");
+  EXPECT_EQ(leaf->build(mesh).nodes, 1u);
+  const auto rays = test::rays_at_triangles(mesh, 300, 1);
+  EXPECT_EQ(test::count_brute_mismatches(*leaf, mesh, rays), 0u);
+}
+
+}  // namespace
+}  // namespace raylab
