@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "tests/scene_test_files.h"
@@ -30,7 +31,7 @@ namespace fs = std::filesystem;
 using test::read_json;
 using test::read_lines;
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) { return fmt::format("'{}'", p.string()); }
 
 TEST(CliVocabulary, RaySetsNamesSetsAndRaysCountsRaysInVerifyAndBench) {
   const auto dir = test::temp_dir("voc_rays");
