@@ -731,8 +731,8 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
 
 TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   // Coherent camera rays (pixel order, a partial last packet) with invalid,
-  // axis-parallel and tmin < 0 rays mixed in, through bvh:packet=16 and the
-  // single-ray kernel: every field equal. Coincident copies of a triangle
+  // axis-parallel, tmin < 0 and short rays mixed in, through bvh:packet=16
+  // and the single-ray kernel: every field equal, and occlusion agrees. Coincident copies of a triangle
   // make exact ties, which both must give to the lowest primitive id.
   for (const Reference& ref : references()) {
     test::NamedMesh s = ref.scene;
@@ -769,6 +769,12 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
       }
       EXPECT_EQ(bad, 0u) << spec << " on " << s.name;
       EXPECT_GT(hits, rays.size() / 10) << s.name;
+      // Occlusion through packets: occluded exactly when the closest hit exists.
+      std::vector<uint8_t> occ(rays.size());
+      packet->occluded(rays, occ);
+      size_t occ_bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i) occ_bad += (occ[i] != 0) != a[i].valid();
+      EXPECT_EQ(occ_bad, 0u) << spec << " occlusion on " << s.name;
     }
   }
 }

@@ -479,6 +479,47 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
   EXPECT_LT(grid2, 50.0);
 }
 
+TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {
+  // Issue 17: the cell margin was sized from the absolute coordinates, so a
+  // sphere of radius 8 at 3e5 had a margin (0.6) as large as a cell and
+  // every cell listed its neighbours' triangles. Counted work, not time:
+  // the same rays (moved with the mesh) visit about as many cells and test
+  // about as many triangles far away as at the origin, and all hit.
+  const Vec3f offset(3e5f, 1e5f, -2e5f);
+  const float radius = 8.0f;
+  const TriangleMesh near_mesh = make_uv_sphere(96, 48, Vec3f::Zero(), radius);
+  const TriangleMesh far_mesh = make_uv_sphere(96, 48, offset, radius);
+  std::vector<Ray> near_rays, far_rays;
+  Pcg32 rng(17, 3);
+  for (int i = 0; i < 600; ++i) {
+    // From inside towards the shell, and from outside at the sphere.
+    const Vec3f org = (i % 2 ? 0.5f : 2.5f) * radius * test::random_direction(rng);
+    const Vec3f target = 0.5f * radius * test::random_direction(rng);
+    const Vec3f dir = i % 2 ? test::random_direction(rng) : Vec3f((target - org).normalized());
+    near_rays.emplace_back(org, dir);
+    far_rays.emplace_back(Vec3f(org + offset), dir);
+  }
+  auto work = [](const std::string& spec, const TriangleMesh& m, const std::vector<Ray>& rays) {
+    auto a = make_accelerator(spec);
+    a->build(m);
+    std::vector<Hit> hits(rays.size());
+    TraversalStats st;
+    a->intersect(rays, hits, &st);
+    size_t hit_count = 0;
+    for (const Hit& h : hits) hit_count += h.valid();
+    EXPECT_EQ(hit_count, rays.size()) << spec;  // every ray meets the closed sphere
+    return std::pair<double, double>(static_cast<double>(st.nodes_visited) / static_cast<double>(rays.size()),
+                                     static_cast<double>(st.triangle_tests) / static_cast<double>(rays.size()));
+  };
+  for (const std::string spec : {"grid", "hashgrid", "grid2"}) {
+    const auto [near_cells, near_tests] = work(spec, near_mesh, near_rays);
+    const auto [far_cells, far_tests] = work(spec, far_mesh, far_rays);
+    EXPECT_LT(far_cells, 1.25 * near_cells) << spec;
+    EXPECT_GT(far_cells, 0.8 * near_cells) << spec;
+    EXPECT_LT(far_tests, 1.5 * near_tests) << spec;  // the old margin: 5-11x
+  }
+}
+
 TEST(GridAccel, HitFarAlongASpanningTriangleWaitsForNearerCells) {
   // T is nearly parallel to the ray and listed in every cell the ray walks;
   // its hit at x = 9 is found in the first cell and must not be accepted

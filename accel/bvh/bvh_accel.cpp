@@ -24,6 +24,7 @@
 #include "accel/bvh/build_sweep_sah.h"
 #include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/bvh2_layout.h"
+#include "accel/bvh/bvh_outline.h"
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/traverse_wide.h"
@@ -67,6 +68,7 @@ class Kernel {
   virtual ~Kernel() = default;
   virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const = 0;
   virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const = 0;
+  virtual void outline(int max_depth, StructureOutline& out) const = 0;
 };
 
 class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
@@ -78,6 +80,7 @@ class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_bvh2<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { outline_bvh2(layout_, max_depth, out); }
 
  private:
   Bvh2Layout layout_;
@@ -112,6 +115,7 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_wide<N, W, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { outline_wide(bvh_, max_depth, out); }
   size_t bytes() const { return bvh_.bytes(); }
 
  private:
@@ -144,6 +148,9 @@ class BvhAccel final : public Accelerator {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
     if (!kernel_) throw std::logic_error("bvh: occluded before build");
     kernel_->occluded(rays, occ, stats);
+  }
+  void outline(int max_depth, StructureOutline& out) const override {
+    if (kernel_) kernel_->outline(max_depth, out);
   }
 
  protected:
@@ -348,6 +355,7 @@ AcceleratorInfo bvh_accelerator_info() {
         return std::make_unique<BvhAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt,layout=bvh2";
+  info.caps.outline = true;
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };

@@ -10,9 +10,12 @@
 // Packet-Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
 // Architecture", HPG 2012): a subtree entered by few rays of the packet is
 // finished by the single-ray walk (walk_wide) for each of them, and a
-// packet whose rays do not share one direction octant is traced as single
-// rays from the start (diffuse and random rays), so incoherent sets pay only
-// the octant test.
+// packet whose rays do not share one origin and one direction octant is
+// traced as single rays from the start. Packets pay on rays from one point
+// (pinhole camera rays); rays from many points towards similar targets
+// (shadow rays of a camera's hits) spread over the tree after a few levels
+// and were measured slower as packets than as single rays (docs/bvh-speed.md),
+// so diffuse, shadow and random sets pay only this test.
 //
 // Answers equal the single-ray walk's bit for bit: per ray the box test is
 // the single-ray FMA slab test on the same values (near plane by the sign of
@@ -106,13 +109,15 @@ class PacketTracer {
     uint32_t members = 0;
     int octant = -1;
     bool coherent = true;
+    const Ray* first = nullptr;
     for (size_t i = 0; i < rays.size(); ++i) {
       if (!packet_ray_ok(rays[i])) {
         trace_single(rays[i], hits[i]);
         continue;
       }
       const int o = ray_octant(rays[i]);
-      coherent &= octant < 0 || o == octant;
+      if (!first) first = &rays[i];
+      coherent &= (octant < 0 || o == octant) && rays[i].org == first->org;
       octant = o;
       members |= 1u << i;
     }

@@ -71,10 +71,11 @@ void plan_box(const DdaGrid& top, std::span<const LeafTriangle> tris, std::span<
   for (int a = 0; a < 3; ++a)
     if (bhi[a] < blo[a]) bhi[a] = blo[a];  // only possible through rounding
   p.extent = bhi - blo;
-  double magnitude = 0.0;
-  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(blo[a]), std::fabs(bhi[a])});
+  // Padded like a grid box, with the top grid's error scale: rays reach the
+  // sub-grid from anywhere in the top grid.
   const double largest_top_cell = std::max({top.cell[0], top.cell[1], top.cell[2]});
-  const double pad = std::max({1e-5 * p.extent.maxCoeff(), 1e-7 * largest_top_cell, 1e-6 * magnitude, 1e-30});
+  const double pad =
+      std::max({1e-5 * p.extent.maxCoeff(), 1e-7 * largest_top_cell, kCellMarginUlps * top.error_scale, 1e-30});
   p.lo = blo.array() - pad;
   p.hi = bhi.array() + pad;
 }
@@ -85,6 +86,14 @@ void set_resolution(SubGridPlan& p, const GridRes& res) {
     p.content.cell[a] = (p.hi[a] - p.lo[a]) / res[a];
     p.content.res[a] = res[a];
   }
+}
+
+// A sub-grid as its builder sees it: its cells, with the top grid's error
+// scale (the margin must cover rays from anywhere in the top grid).
+DdaGrid subgrid_dda(const TopCellContent& content, const DdaGrid& top) {
+  DdaGrid d = content.dda();
+  d.error_scale = top.error_scale;
+  return d;
 }
 
 // Cells covered by the triangles' bounding boxes (an upper bound of the
@@ -196,7 +205,7 @@ double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, con
       for (size_t k = r.begin(); k < r.end(); ++k) {
         if (over.load(std::memory_order_relaxed)) return;
         if (!plans[k].content.has_subgrid()) continue;
-        if (!build_cell_lists(plans[k].content.dda(), opt.assign, g.tris, plans[k].small, ref_limit, lists[k]) ||
+        if (!build_cell_lists(subgrid_dda(plans[k].content, g.top), opt.assign, g.tris, plans[k].small, ref_limit, lists[k]) ||
             refs.fetch_add(lists[k].refs.size()) + lists[k].refs.size() > ref_limit)
           over = true;
       }

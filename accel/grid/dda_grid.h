@@ -25,6 +25,10 @@ struct DdaGrid {
   double inv_cell[3] = {1, 1, 1};
   int32_t res[3] = {1, 1, 1};
   int64_t stride[3] = {1, 1, 1};  // linear cell index = x*stride[0] + y*stride[1] + z*stride[2]
+  // Distance scale of the triangle test's rounding the cell margin must
+  // cover (see grid_error_scale); only the builders read it. A sub-grid
+  // takes its root grid's, since rays reach it from anywhere in the root.
+  double error_scale = 0.0;
 
   uint64_t cells() const { return static_cast<uint64_t>(res[0]) * res[1] * res[2]; }
 
@@ -37,6 +41,39 @@ struct DdaGrid {
   double boundary(int axis, int64_t c) const { return lo[axis] + static_cast<double>(c) * cell[axis]; }
   int64_t index(int32_t x, int32_t y, int32_t z) const { return x * stride[0] + y * stride[1] + z * stride[2]; }
 };
+
+// Why the margin is sized from the grid's extent, not its coordinates.
+// The watertight test (Woop et al. 2013) decides on float p - org; the
+// difference of two floats is rounded once, to within half an ulp of
+// |p - org|, and the shear and edge functions add a few ulps of that same
+// size. So the test's rounding moves a triangle by a few ulps of the
+// distance between the ray's origin and the triangle (the k-d tree's margin
+// uses the same bound, traverse_kdtree.h), whatever the absolute
+// coordinates are. Sizing it from the coordinates (as before) made a mesh of
+// size 2 at 3e5 get a margin of 0.6, larger than the mesh: every cell held
+// every triangle and verify ran 1000x slower than at the origin (issue 17).
+//
+// The scale S is the smaller of the grid's largest coordinate (the old
+// bound, still right near the origin) and kOriginReach times its largest
+// side. 16 ulps of S cover every ray whose origin lies within about
+// 2 S - diagonal ~ 6 grid sides of the grid box (cameras, bounces, shadow
+// rays, stress's rays from inside). A ray from much farther away rounds by
+// more than the margin, but only on triangles it passes within a few
+// ulps(|p - org|) of: the oracle counts those as grazing (its tolerance is
+// 1e-5 of that scale, the rounding 1e-7), so they are ties, not wrong hits
+// - exactly as for brute force, whose float answer is no closer.
+inline constexpr double kCellMarginRelative = 1e-3;
+inline constexpr double kCellMarginUlps = 16.0 * 0x1p-23;
+inline constexpr double kOriginReach = 4.0;
+
+inline double grid_error_scale(const double lo[3], const double hi[3]) {
+  double magnitude = 0.0, largest = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    magnitude = std::max({magnitude, std::fabs(lo[a]), std::fabs(hi[a])});
+    largest = std::max(largest, hi[a] - lo[a]);
+  }
+  return std::min(magnitude, kOriginReach * largest);
+}
 
 // A grid with origin `lo`, cell sides `cell` (> 0) and resolution `res`.
 // Boundaries are lo + c * cell, so two grids made from the same lo and cell
@@ -60,31 +97,28 @@ inline DdaGrid make_dda_grid_from_cells(const double lo[3], const double cell[3]
 inline DdaGrid make_dda_grid(const Vec3d& lo, const Vec3d& hi, const GridRes& res) {
   double cell[3];
   for (int a = 0; a < 3; ++a) cell[a] = (hi[a] - lo[a]) / res[a];
-  return make_dda_grid_from_cells(lo.data(), cell, res.data());
+  DdaGrid g = make_dda_grid_from_cells(lo.data(), cell, res.data());
+  g.error_scale = grid_error_scale(g.lo, g.hi);
+  return g;
 }
 
 // Enlargement of every cell when triangles are assigned to cells: 1/1000 of
-// a cell side, plus 16 float ulps of the grid's largest coordinate (the
-// watertight test works on float coordinates relative to the ray origin).
-inline constexpr double kCellMarginRelative = 1e-3;
-inline constexpr double kCellMarginUlps = 16.0 * 0x1p-23;
-
+// a cell side, plus 16 float ulps of the grid's error scale.
 inline Vec3d assignment_margin(const DdaGrid& g) {
-  double magnitude = 0.0;
-  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(g.lo[a]), std::fabs(g.hi[a])});
   return Vec3d(kCellMarginRelative * g.cell[0], kCellMarginRelative * g.cell[1], kCellMarginRelative * g.cell[2])
-      .array() + kCellMarginUlps * magnitude;
+      .array() + kCellMarginUlps * g.error_scale;
 }
 
 // The box a grid is laid over: `bounds` padded on every side by 1e-5 of its
-// largest side (and a few ulps of its coordinates), so triangles on the
-// boundary lie inside and a flat side gets a non-zero thickness.
+// largest side, and at least by the cell margin's ulps term (a point where
+// the triangle test may report a hit must lie in the box to be walked), so
+// triangles on the boundary lie inside and a flat side gets a non-zero
+// thickness.
 inline void padded_grid_box(const Aabb& bounds, Vec3d& lo, Vec3d& hi) {
   lo = bounds.lo.cast<double>();
   hi = bounds.hi.cast<double>();
   const double largest = (hi - lo).maxCoeff();
-  const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
-  const double pad = std::max({1e-5 * largest, 1e-6 * magnitude, 1e-30});
+  const double pad = std::max({1e-5 * largest, kCellMarginUlps * grid_error_scale(lo.data(), hi.data()), 1e-30});
   lo.array() -= pad;
   hi.array() += pad;
 }

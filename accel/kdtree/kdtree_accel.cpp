@@ -8,6 +8,7 @@
 #include "accel/core/triangle_test_param.h"
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
+#include "accel/kdtree/kdtree_outline.h"
 #include "accel/kdtree/traverse_kdtree.h"
 
 namespace raylab {
@@ -24,6 +25,9 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_kdtree<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+  void outline(int max_depth, StructureOutline& out) const override {
+    outline_kdtree(view_.bounds, nodes_, max_depth, out);
   }
 
  protected:
@@ -121,6 +125,7 @@ AcceleratorInfo kdtree_accelerator_info() {
         return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p));
       }};
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt"};
   info.stats = {{"inner_nodes", "inner nodes"},
                 {"empty_leaves", "leaves without triangles"},
