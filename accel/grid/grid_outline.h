@@ -5,6 +5,7 @@
 // within the part of the top cell the sub-grid covers). Empty cells are not
 // drawn: the occupied ones show where a ray has work to do.
 #include "accel/grid/hash_grid.h"
+#include "accel/grid/implicit_grid.h"
 #include "accel/grid/two_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 #include "accel/structure_outline.h"
@@ -14,5 +15,6 @@ namespace raylab {
 void grid_outline(const UniformGrid& grid, int max_depth, StructureOutline& out);
 void grid_outline(const HashGrid& grid, int max_depth, StructureOutline& out);
 void grid_outline(const TwoLevelGrid& grid, int max_depth, StructureOutline& out);
+void grid_outline(const ImplicitGrid& grid, int max_depth, StructureOutline& out);
 
 }  // namespace raylab
