@@ -1,5 +1,7 @@
 #include "accel/grid/grid_outline.h"
 
+#include <algorithm>
+
 namespace raylab {
 
 namespace {
@@ -66,19 +68,20 @@ void grid_outline(const TwoLevelGrid& grid, int max_depth, StructureOutline& out
   }
 }
 
+// The implicit grid: a cell is occupied when the AND of its three slabs has a bit.
 void grid_outline(const ImplicitGrid& grid, int max_depth, StructureOutline& out) {
-  out.what = "grid cells whose x, y and z slabs share a triangle (implicit)";
+  out.what = "occupied grid cells (implicit: AND of slab bit arrays)";
   if (grid.empty || !out.add(OutlineBox{grid_box(grid.dda), 0, false}) || max_depth < 1) return;
-  const DdaGrid& g = grid.dda;
-  for (int64_t z = 0; z < g.res[2]; ++z)
-    for (int64_t y = 0; y < g.res[1]; ++y)
-      for (int64_t x = 0; x < g.res[0]; ++x) {
-        const uint64_t* sx = grid.bits.data() + grid.slab(0, static_cast<int32_t>(x)) * grid.words;
-        const uint64_t* sy = grid.bits.data() + grid.slab(1, static_cast<int32_t>(y)) * grid.words;
-        const uint64_t* sz = grid.bits.data() + grid.slab(2, static_cast<int32_t>(z)) * grid.words;
-        bool occupied = false;
-        for (size_t w = 0; w < grid.words && !occupied; ++w) occupied = (sx[w] & sy[w] & sz[w]) != 0;
-        if (occupied && !out.add(OutlineBox{cell_box(g, x, y, z), 1, true})) return;
+  for (int32_t z = 0; z < grid.dda.res[2]; ++z)
+    for (int32_t y = 0; y < grid.dda.res[1]; ++y)
+      for (int32_t x = 0; x < grid.dda.res[0]; ++x) {
+        const size_t s[3] = {grid.slab(0, x), grid.slab(1, y), grid.slab(2, z)};
+        const uint32_t lo = std::max({grid.word_lo[s[0]], grid.word_lo[s[1]], grid.word_lo[s[2]]});
+        const uint32_t hi = std::min({grid.word_hi[s[0]], grid.word_hi[s[1]], grid.word_hi[s[2]]});
+        bool any = false;
+        for (uint32_t w = lo; w < hi && !any; ++w)
+          any = (grid.bits[s[0] * grid.words + w] & grid.bits[s[1] * grid.words + w] & grid.bits[s[2] * grid.words + w]) != 0;
+        if (any && !out.add(OutlineBox{cell_box_of_index(grid.dda, grid.dda.index(x, y, z)), 1, true})) return;
       }
 }
 

@@ -15,7 +15,6 @@ namespace raylab {
 void grid_outline(const UniformGrid& grid, int max_depth, StructureOutline& out);
 void grid_outline(const HashGrid& grid, int max_depth, StructureOutline& out);
 void grid_outline(const TwoLevelGrid& grid, int max_depth, StructureOutline& out);
-// Depth 1: the cells whose three slabs share a triangle (the AND is non-empty).
 void grid_outline(const ImplicitGrid& grid, int max_depth, StructureOutline& out);
 
 }  // namespace raylab

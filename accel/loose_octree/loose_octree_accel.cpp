@@ -20,8 +20,39 @@ class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
     return traverse_loose_octree<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
 
+  // raylab show: the loose boxes of the nodes down to max_depth.
+  void outline(int max_depth, StructureOutline& out) const override {
+    if (view_.empty) return;
+    out.what = "loose octree node boxes";
+    struct Item {
+      uint32_t node;
+      uint32_t c[3];
+      int level;
+    };
+    std::vector<Item> stack{{0u, {0, 0, 0}, 0}};
+    while (!stack.empty()) {
+      const Item it = stack.back();
+      stack.pop_back();
+      const OctreeNode& n = nodes_[it.node];
+      float lo[3], hi[3];
+      view_.boxes.box(it.level, it.c, lo, hi);
+      // Loose boxes clipped to the scene's bounds (they overhang it).
+      const Aabb box(Vec3f(lo[0], lo[1], lo[2]).cwiseMax(bounds_.lo), Vec3f(hi[0], hi[1], hi[2]).cwiseMin(bounds_.hi));
+      if (!out.add(OutlineBox{box, it.level, n.mask() == 0}))
+        return;
+      if (it.level >= max_depth || n.mask() == 0) continue;
+      const uint32_t h = OctreeCube::span(it.level + 1);
+      for (uint32_t c = 0; c < 8; ++c)
+        if (n.mask() >> c & 1u)
+          stack.push_back({n.first_child + c,
+                           {it.c[0] + (c & 1u ? h : 0u), it.c[1] + (c & 2u ? h : 0u), it.c[2] + (c & 4u ? h : 0u)},
+                           it.level + 1});
+    }
+  }
+
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
+    bounds_ = mesh.bounds();
     LooseBoxes boxes;
     OctreeTree tree = build_loose_octree(mesh, opt_, boxes);
     const OctreeShape shape = measure_octree(tree);
@@ -51,6 +82,7 @@ class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
   std::vector<OctreeNode> nodes_;
   std::vector<LeafTriangle> tris_;
   LooseOctreeView view_;
+  Aabb bounds_;
 };
 
 }  // namespace
@@ -77,6 +109,7 @@ AcceleratorInfo loose_octree_accelerator_info() {
         return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p));
       }};
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   info.cover = {"loose_octree:k=1.25"};
   info.stats = {{"inner_nodes", "inner nodes"},
                 {"references", "triangle references (= triangles: each stored once)"},

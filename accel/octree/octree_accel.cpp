@@ -27,8 +27,41 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
     return traverse_octree<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
 
+  // raylab show: node cubes down to max_depth (leaves drawn as leaves).
+  void outline(int max_depth, StructureOutline& out) const override {
+    if (view_.empty) return;
+    out.what = "octree node cubes";
+    struct Item {
+      uint64_t h;
+      uint32_t c[3];
+      int level;
+    };
+    std::vector<Item> stack{{Layout::kRoot, {0, 0, 0}, 0}};
+    while (!stack.empty()) {
+      const Item it = stack.back();
+      stack.pop_back();
+      const OctNodeRec n = view_.layout.node(it.h, it.level);
+      const uint32_t s = OctreeCube::span(it.level), mask = n.meta & 0xffu;
+      // Cubes clipped to the scene's bounds (the root cube overhangs them).
+      const Aabb box(Vec3f(view_.cube.plane(0, it.c[0]), view_.cube.plane(1, it.c[1]), view_.cube.plane(2, it.c[2]))
+                         .cwiseMax(bounds_.lo),
+                     Vec3f(view_.cube.plane(0, it.c[0] + s), view_.cube.plane(1, it.c[1] + s),
+                           view_.cube.plane(2, it.c[2] + s))
+                         .cwiseMin(bounds_.hi));
+      if (!out.add(OutlineBox{box, it.level, mask == 0})) return;
+      if (it.level >= max_depth || mask == 0) continue;
+      const uint32_t h = s / 2;
+      for (uint32_t c = 0; c < 8; ++c)
+        if (mask >> c & 1u)
+          stack.push_back({view_.layout.child(it.h, n, c),
+                           {it.c[0] + (c & 1u ? h : 0u), it.c[1] + (c & 2u ? h : 0u), it.c[2] + (c & 4u ? h : 0u)},
+                           it.level + 1});
+    }
+  }
+
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
+    bounds_ = mesh.bounds();
     OctreeTree tree = build_octree(mesh, opt_.build);
     const OctreeShape shape = measure_octree(tree);
     // Each referenced triangle copied once, in first-use order, nodes keep
@@ -99,6 +132,7 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
   OctreeView<Layout> view_;
+  Aabb bounds_;
 };
 
 }  // namespace
@@ -139,6 +173,7 @@ AcceleratorInfo octree_accelerator_info() {
         return std::make_unique<OctreeAccel<OctPointerLayout>>(opt, test);
       }};
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash"};
   info.stats = {{"inner_nodes", "inner nodes"},
                 {"empty_leaves", "leaves without triangles"},
