@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench bench-full bench-slurm-local microbench clean
+.PHONY: all deps configure build test demo bench bench-full bench-slurm-local docs report microbench clean
 
 all: build
 
@@ -24,9 +24,9 @@ demo: build
 	./$(BUILD)/raylab bench --scene cornell --accel all --ray-sets primary,random --quiet
 
 # The benchmark study (workflow/Snakefile, configured by workflow/config.yaml): one job per
-# cell, merged into out/bench/*.json, *.csv, charts and summary.md; the quick preset also
-# refreshes docs/charts/. A rerun with nothing changed does nothing. SNAKEFLAGS adds options
-# (e.g. SNAKEFLAGS=--forceall, or -n for a dry run).
+# cell, merged into out/bench/*.json, *.csv, charts, summary.md, heatmaps/, structures/ and
+# report.html. It writes only under out/: `git status` stays clean. A rerun with nothing
+# changed does nothing. SNAKEFLAGS adds options (e.g. SNAKEFLAGS=--forceall, or -n for a dry run).
 SNAKEMAKE = snakemake -s workflow/Snakefile --cores $(JOBS) --config raylab=$(BUILD)/raylab
 SNAKEFLAGS ?=
 
@@ -43,6 +43,21 @@ bench-full: configure
 bench-slurm-local: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab
 	BUILD=$(BUILD) bash scripts/slurm-local.sh test
+
+# The report page of the last `make bench` (out/report.html, self-contained, and out/report.md).
+report: configure
+	cmake --build $(BUILD) -j $(JOBS) --target raylab
+	./$(BUILD)/raylab report out/bench -o out/report.html
+
+# Regenerates what the README and docs/results.md show, explicitly: runs the quick study,
+# then writes docs/results.md (+ docs/results_files/), copies the charts and pictures to
+# docs/charts/ and replaces the README's headline block between its results markers.
+docs: bench
+	./$(BUILD)/raylab report out/bench -o out/report.html --md docs/results.md
+	mkdir -p docs/charts docs/pictures
+	cp out/bench/charts/*.png docs/charts/
+	cp out/bench/heatmaps/*.png out/bench/structures/*.png docs/pictures/
+	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
 
 microbench: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab_microbench

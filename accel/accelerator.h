@@ -32,6 +32,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "accel/structure_outline.h"
 #include "base/hit.h"
 #include "base/ray.h"
 #include "base/timer.h"
@@ -117,6 +118,12 @@ class Accelerator {
                                  std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const {
     this->occluded(rays, occluded, stats);
   }
+
+  // Optional picture of the built structure (accel/structure_outline.h):
+  // appends its boxes / split planes / cells of depth <= max_depth to `out`.
+  // Structures that implement it say so with Capabilities::outline; the
+  // default adds nothing. Never called on the hot path.
+  virtual void outline(int /*max_depth*/, StructureOutline& /*out*/) const {}
 
   // Convenience single-ray queries (not for hot loops).
   Hit intersect1(const Ray& r) const {

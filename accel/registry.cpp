@@ -10,6 +10,8 @@
 #include "accel/embree/embree_accel.h"
 #include "accel/kdtree/kdtree_accel.h"
 #include "accel/grid/grid_accels.h"
+#include "accel/hgrid/hgrid_accel.h"
+#include "accel/octree/octree_accel.h"
 
 namespace raylab {
 
@@ -23,6 +25,8 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       grid_accelerator_info(),
       hashgrid_accelerator_info(),
       grid2_accelerator_info(),
+      octree_accelerator_info(),
+      hgrid_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)

@@ -28,6 +28,7 @@ struct Capabilities {
   bool per_ray_counters = true;  // the instrumented kernels count nodes and triangle tests
   bool quadratic = false;        // cost grows with rays x triangles: benches skip large scenes
   bool reference = false;        // the reference the others are compared with (its failures do not count)
+  bool outline = false;          // Accelerator::outline() draws the structure (raylab show)
 };
 
 using Description = std::vector<std::pair<std::string, std::string>>;

@@ -29,6 +29,7 @@ Runner add_compare(CLI::App& app) {
   struct Opts {
     std::string a, b, json, colour = "auto";
     double fail_above = -1, alpha = 0.05, min_change = 5.0;
+    bool raw = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -43,6 +44,9 @@ Runner add_compare(CLI::App& app) {
   cmd->add_option("--min-change", o->min_change, "noise floor: speed changes under PCT percent are never significant")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_flag("--raw", o->raw,
+               "test raw trace times instead of times divided by the same cell's Embree time (which cancels "
+               "machine-wide drift between the two runs)");
   cmd->add_option("-o,--json", o->json, "write the comparison as JSON to this file ('-' for stdout, no table)");
   cmd->add_option("--colour,--color", o->colour, "auto (when stdout is a terminal), always or never")
       ->capture_default_str()
@@ -54,6 +58,7 @@ Runner add_compare(CLI::App& app) {
     co.alpha = o->alpha;
     co.min_change_pct = o->min_change;
     co.fail_above_pct = o->fail_above;
+    co.normalize_by_embree = !o->raw;
     const CompareResult r = compare_bench_reports(a, b, co);
     if (r.cells.empty())
       throw std::runtime_error(fmt::format("{} and {} have no cell (scene, accel, ray set, threads) in common", o->a, o->b));

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accel/registry.h"
+#include "app/cmd_report_palette.h"
 #include "base/timer.h"
 #include "app/commands.h"
 #include "bench/bench_run.h"
@@ -110,7 +111,9 @@ static nlohmann::json accelerators_json() {
                          {"robust_variant", c.robust_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.robust_variant)},
                          {"per_ray_counters", c.per_ray_counters},
                          {"quadratic", c.quadratic},
-                         {"reference", c.reference}};
+                         {"reference", c.reference},
+                         {"outline", c.outline}};
+    j["colour"] = structure_colour_of_name(info.name);  // one colour per structure in every chart
     out.push_back(j);
   }
   return out;

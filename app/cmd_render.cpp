@@ -7,6 +7,7 @@
 
 #include "accel/registry.h"
 #include "app/camera_options.h"
+#include "app/cmd_render_aov.h"
 #include "base/timer.h"
 #include "app/commands.h"
 #include "bench/report.h"
@@ -38,7 +39,7 @@ std::string default_output_name(const std::string& scene_arg) {
 
 Runner add_render(CLI::App& app) {
   struct Opts {
-    std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background;
+    std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background, aov;
     int spp = 64, threads = 0, max_depth = 64;
     uint64_t seed = 1;
     bool quiet = false;
@@ -63,6 +64,9 @@ Runner add_render(CLI::App& app) {
   cmd->add_option("--max-depth", o->max_depth, "maximum path length")->capture_default_str()->check(CLI::Range(1, 1024));
   cmd->add_option("--json", o->json, "also write the timings (build, render, wall time) to this JSON file");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
+  cmd->add_option("--aov", o->aov,
+                  "per-pixel cost picture instead of a rendering: nodes, tris or time per primary ray "
+                  "(PNG with colour bar + raw PFM; with several --accel, one contact sheet on a shared scale)");
 
   return [o]() {
     std::unique_ptr<tbb::global_control> limit;
@@ -70,6 +74,30 @@ Runner add_render(CLI::App& app) {
       limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
     // Check every argument before loading a possibly large scene.
     const auto accels = expand_accelerator_list(o->accel);
+    if (!o->aov.empty()) {
+      check_aov_kind(o->aov);
+      AovOptions aov;
+      aov.kind = o->aov;
+      aov.accels = accels;
+      const std::string scene_arg = pick_scene("render", o->scene, o->positional_scene, "cornell");
+      aov.out = o->out;
+      if (aov.out.empty()) {
+        aov.out = default_output_name(scene_arg);
+        aov.out.insert(aov.out.size() - 4, "_" + o->aov);
+      }
+      const std::string ext = lower_extension_of(aov.out);
+      if (ext != ".png" && ext != ".pfm")
+        throw std::invalid_argument(fmt::format("--out {}: --aov writes a .png (with the raw .pfm next to it) or a .pfm", aov.out));
+      if (!o->size.empty()) std::tie(aov.width, aov.height) = parse_size(o->size);
+      if (!o->camera.empty()) {
+        View probe;
+        apply_camera_option(o->camera, probe);
+      }
+      Scene scene = load_scene(scene_arg);
+      if (!o->up.empty()) apply_up_axis(o->up, scene);
+      if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
+      return render_cost_aov(scene, aov);
+    }
     if (accels.size() != 1)
       throw std::invalid_argument(fmt::format(
           "render uses one accelerator, '{}' names {} ({}); lists and 'all' are for verify, stress and bench",

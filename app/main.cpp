@@ -28,6 +28,8 @@ int main(int argc, char** argv) {
   add(add_scenes, "scenes");
   add(add_accels, "accels");
   add(add_compare, "compare");
+  add(add_show, "show");
+  add(add_report, "report");
 
   std::string names;
   bool known = false;

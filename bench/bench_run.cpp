@@ -231,6 +231,12 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_gib(static_cast<double>(estimate))),
            estimate, available_memory_bytes());
       continue;
+    } catch (const std::exception& e) {
+      // A structure that cannot be built on this scene (e.g. a grid whose memory
+      // budget cannot hold 10^8 triangles' references): a record of why, and the
+      // rest of the matrix still runs. Specs were validated before the scene loaded.
+      skip(spec, fmt::format("build failed: {}", e.what()), estimate, available_memory_bytes());
+      continue;
     }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
     const bool is_reference = &accel == embree.accel.get();

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "accel/registry.h"
 #include "bench/report.h"
 
 namespace raylab {
@@ -118,21 +119,30 @@ CompareResult compare_bench_reports(const nlohmann::json& a, const nlohmann::jso
     std::tie(c.scene, c.accel, c.ray_set, c.threads) = key;
     c.mrays_a = number(ra, "mrays_per_s");
     c.mrays_b = number(rb, "mrays_per_s");
-    c.speed_change_pct = change_pct(c.mrays_a, c.mrays_b);
     c.build_ms_a = number(ra, "build_ms");
     c.build_ms_b = number(rb, "build_ms");
     c.build_change_pct = change_pct(c.build_ms_a, c.build_ms_b);
     c.bytes_a = number(ra, "bytes");
     c.bytes_b = number(rb, "bytes");
     c.bytes_change_pct = change_pct(c.bytes_a, c.bytes_b);
-    auto times = [](const nlohmann::json& r) {
+    // Seconds of Embree per ray set in the same cell (timed back to back with it).
+    auto embree_s = [](const nlohmann::json& r) {
+      const double mrays = number(r, "embree_mrays_per_s"), rays = number(r, "rays");
+      return mrays > 0 && rays > 0 ? rays / (mrays * 1e6) : 0.0;
+    };
+    const double ea = embree_s(ra), eb = embree_s(rb);
+    c.normalized = opt.normalize_by_embree && ea > 0 && eb > 0 && !is_reference_spec(c.accel);
+    auto times = [&](const nlohmann::json& r, double embree_seconds) {
       std::vector<double> t;
       if (r.contains("trace_s") && r["trace_s"].is_array())
         for (const auto& v : r["trace_s"])
-          if (v.is_number()) t.push_back(v.get<double>());
+          if (v.is_number()) t.push_back(c.normalized ? v.get<double>() / embree_seconds : v.get<double>());
       return t;
     };
-    const auto ta = times(ra), tb = times(rb);
+    // The speed change on the same footing as the test: ratio to Embree when normalised.
+    c.speed_change_pct = c.normalized ? change_pct(number(ra, "ratio_to_embree"), number(rb, "ratio_to_embree"))
+                                      : change_pct(c.mrays_a, c.mrays_b);
+    const auto ta = times(ra, ea), tb = times(rb, eb);
     if (ta.size() >= 2 && tb.size() >= 2) {
       c.p_value = mann_whitney_p(ta, tb);
       c.significant = *c.p_value < opt.alpha && std::fabs(c.speed_change_pct) >= opt.min_change_pct;
@@ -162,6 +172,7 @@ nlohmann::json compare_result_json(const CompareResult& r, const CompareOptions&
                      {"bytes_a", c.bytes_a},
                      {"bytes_b", c.bytes_b},
                      {"bytes_change_pct", c.bytes_change_pct},
+                     {"normalized_by_embree", c.normalized},
                      {"p_value", c.p_value ? nlohmann::json(*c.p_value) : nlohmann::json(nullptr)},
                      {"significant", c.significant},
                      {"regression", c.regression}});
@@ -169,6 +180,7 @@ nlohmann::json compare_result_json(const CompareResult& r, const CompareOptions&
           {"command", "compare"},
           {"alpha", opt.alpha},
           {"min_change_pct", opt.min_change_pct},
+          {"normalize_by_embree", opt.normalize_by_embree},
           {"fail_above_pct", opt.fail_above_pct >= 0 ? nlohmann::json(opt.fail_above_pct) : nlohmann::json(nullptr)},
           {"only_in_a", r.only_in_a},
           {"only_in_b", r.only_in_b},
@@ -194,8 +206,10 @@ std::string format_compare_table(const CompareResult& r, const CompareOptions& o
                      on, verdict, *on ? "\033[0m" : "", pct(c.build_change_pct), pct(c.bytes_change_pct));
   }
   s += fmt::format("{} matching cells, {} only in A, {} only in B; significance: two-sided Mann-Whitney U over the "
-                   "per-repeat trace times, alpha {}, changes under {}% ignored",
-                   r.cells.size(), r.only_in_a, r.only_in_b, opt.alpha, opt.min_change_pct);
+                   "per-repeat trace times{}, alpha {}, changes under {}% ignored",
+                   r.cells.size(), r.only_in_a, r.only_in_b,
+                   opt.normalize_by_embree ? " divided by the same cell's Embree time (speed = change in ratio to Embree)" : "",
+                   opt.alpha, opt.min_change_pct);
   if (opt.fail_above_pct >= 0)
     s += fmt::format("; {} regression{} slower than {}%", r.regressions, r.regressions == 1 ? "" : "s", opt.fail_above_pct);
   return s + "\n";

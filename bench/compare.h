@@ -4,6 +4,15 @@
 // compare.py: the change in speed, build time and memory, and whether the
 // speed change is significant by a two-sided Mann–Whitney U test over the
 // per-repeat trace times both runs store (record field trace_s).
+//
+// Drift: runs of one revision on a shared machine differ by a few percent
+// because the machine's load changes between them, and with seven repeats per
+// run the U test calls such a shift significant. Bench times single-ray Embree
+// back to back with every cell (embree_mrays_per_s), so by default each
+// repeat's time is divided by that same-cell Embree time: the test and the
+// speed change are on the ratio to Embree, which a machine-wide slow-down
+// moves far less than raw times. The reference cells themselves, and reports
+// without an Embree time, are compared on raw times.
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +36,7 @@ struct CompareCell {
   double build_ms_a = 0, build_ms_b = 0, build_change_pct = 0;
   double bytes_a = 0, bytes_b = 0, bytes_change_pct = 0;
   std::optional<double> p_value;  // none when either run lacks per-repeat times
+  bool normalized = false;        // test and speed change on times / same-cell Embree time
   bool significant = false;       // p < alpha and |speed change| >= min_change_pct
   bool regression = false;        // slower by more than the threshold (and significant when testable)
 };
@@ -38,6 +48,7 @@ struct CompareOptions {
   // enough repeats the U test finds such drifts "significant".
   double min_change_pct = 5.0;
   double fail_above_pct = -1;  // < 0: no regression threshold
+  bool normalize_by_embree = true;  // see the drift note at the top
 };
 
 struct CompareResult {

@@ -44,14 +44,6 @@ def registry(binary):
         return None
 
 
-def with_param(reg, param, recs):
-    """Names of the accelerators that declare `param` (asked of the binary; without one, the
-    structures whose records carry the parameter in their spec)."""
-    if reg is not None:
-        return {a["name"] for a in reg if any(p["name"] == param for p in a["params"])}
-    return {parse_spec(r["accel"])[0] for r in recs if param in parse_spec(r["accel"])[1]}
-
-
 def load(path):
     with open(path) as f:
         return json.load(f)
@@ -101,167 +93,302 @@ def single_thread(recs):
     return one if one else recs
 
 
+# One colour per structure in every chart: the registry's (`raylab accels --json` gives
+# each structure's "colour", app/cmd_report_palette.h), with the same table here for runs
+# without the binary. A variant (a spec with parameters) takes its structure's colour,
+# lightened; line styles and markers then tell variants apart.
+FIXED_COLOURS = {"embree": "#1f1f1f", "brute": "#8c8c8c", "bvh": "#1f77b4", "kdtree": "#d62728", "grid": "#2ca02c",
+                 "hashgrid": "#98df8a", "grid2": "#006d2c", "octree": "#9467bd", "loose_octree": "#c5b0d5",
+                 "hgrid": "#17becf", "bsp": "#ff7f0e", "hybrid": "#e377c2", "irgrid": "#bcbd22"}
+SPARE_COLOURS = ["#8c564b", "#7f7f00", "#ff9896", "#aec7e8", "#c49c94", "#dbdb8d"]
+REGISTRY_COLOURS = {}
+
+
+def name_colour(name):
+    if name in REGISTRY_COLOURS:
+        return REGISTRY_COLOURS[name]
+    if name in FIXED_COLOURS:
+        return FIXED_COLOURS[name]
+    h = 2166136261
+    for ch in name.encode():
+        h = ((h ^ ch) * 16777619) & 0xFFFFFFFF
+    return SPARE_COLOURS[h % len(SPARE_COLOURS)]
+
+
+def lighten(hex_colour, amount):
+    c = [int(hex_colour[1 + 2 * i:3 + 2 * i], 16) for i in range(3)]
+    return "#" + "".join(f"{int(v + (255 - v) * amount + 0.5):02x}" for v in c)
+
+
+def colour_of(spec):
+    name, params = parse_spec(spec)
+    return name_colour(name) if not params else lighten(name_colour(name), 0.45)
+
+
+MARKERS = "osD^v<>pPX*h"
+LINESTYLES = ["-", "--", "-.", ":"]
+
+
+def style_of(spec, specs):
+    """Marker and line style that tell apart the specs of one structure (same colour)."""
+    name = parse_spec(spec)[0]
+    same = sorted(s for s in specs if parse_spec(s)[0] == name)
+    i = same.index(spec) if spec in same else 0
+    return dict(color=colour_of(spec), marker=MARKERS[i % len(MARKERS)], ls=LINESTYLES[i % len(LINESTYLES)])
+
+
+def log_ticks(ax, axis="both"):
+    """Readable log axes: ticks at 1, 2, 5 x 10^k with plain numbers, not one lone label."""
+    from matplotlib.ticker import FuncFormatter, LogLocator
+    fmt = FuncFormatter(lambda v, _: f"{v:g}")
+    for which in (["x", "y"] if axis == "both" else [axis]):
+        a = ax.xaxis if which == "x" else ax.yaxis
+        if (ax.get_xscale() if which == "x" else ax.get_yscale()) != "log":
+            continue
+        a.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0), numticks=12))
+        a.set_major_formatter(fmt)
+        a.set_minor_formatter(FuncFormatter(lambda v, _: ""))
+
+
+def error_bars(recs, value, lo, hi):
+    """(values, [below, above]) for matplotlib's yerr from each record's min and max."""
+    vals = [value(r) for r in recs]
+    below = [max(v - lo(r), 0) if lo(r) is not None else 0 for v, r in zip(vals, recs)]
+    above = [max(hi(r) - v, 0) if hi(r) is not None else 0 for v, r in zip(vals, recs)]
+    return vals, [below, above]
+
+
+def ratio_range(r):
+    """(min, max) ratio to Embree from the slowest and fastest repeats, or (None, None)."""
+    e = r.get("embree_mrays_per_s")
+    if not e or r.get("mrays_min") is None or r.get("mrays_max") is None:
+        return None, None
+    return r["mrays_min"] / e, r["mrays_max"] / e
+
+
 # ---------------------------------------------------------------- charts
 
 def chart_speed_vs_accuracy(bench, verify_files, stress_files, out, written, header):
     """Ratio to Embree (geometric mean over scenes and ray sets, 1 thread) against
-    disagreement rates (verify) and watertight leaks (stress), one point per configuration."""
-    speed = {}
-    for r in single_thread(bench):
+    disagreement rates (verify), distance error and watertight leaks (stress), one point per
+    configuration. Zero is a real value on these axes (symlog: linear near 0, log above), the
+    names are in the legend (no overlapping labels), and a configuration measured on fewer
+    scenes than the others says so in its label."""
+    recs = single_thread(bench)
+    all_scenes = {r["scene"] for r in recs}
+    speed, cover = {}, {}
+    for r in recs:
         speed.setdefault(r["accel"], []).append(r["ratio_to_embree"])
+        cover.setdefault(r["accel"], set()).add(r["scene"])
     speed = {k: geomean(v) for k, v in speed.items()}
 
-    # Accuracy per configuration: from verify (oracle-referred) when given,
-    # else from the bench's own agreement with Embree.
     wrong, disagree, terr, source = {}, {}, {}, "bench agreement with Embree"
     vrecs = [r for f in verify_files for r in records(f)]
     if vrecs:
         source = "raylab verify"
         tot = {}
         for r in vrecs:
-            t = tot.setdefault(r["accel"], [0, 0, 0, 0])
+            t = tot.setdefault(r["accel"], [0, 0, 0])
             t[0] += r["rays"]
             t[1] += r["raylab_wrong"]
             t[2] += r.get("hit_miss_disagree", 0) + r.get("prim_disagree", 0) + r.get("ties", 0)
-            t[3] += r.get("embree_wrong", 0)
-            terr[r["accel"]] = max(terr.get(r["accel"], 0.0), r.get("max_rel_t_err", 0.0))
-        for k, (n, w, d, _) in tot.items():
+            terr[r["accel"]] = max(terr.get(r["accel"], 0.0), r.get("max_rel_t_err") or 0.0)
+        for k, (n, w, d) in tot.items():
             wrong[k] = w / n if n else 0.0
             disagree[k] = d / n if n else 0.0
     else:
         tot = {}
         for r in bench:
             t = tot.setdefault(r["accel"], [0.0, 0])
-            t[0] += (1.0 - r.get("embree_agreement", 1.0)) * r["rays"]
+            t[0] += (1.0 - (r.get("embree_agreement") or 1.0)) * r["rays"]
             t[1] += r["rays"]
         for k, (d, n) in tot.items():
             disagree[k] = d / n if n else 0.0
     srecs = [r for f in stress_files for r in records(f)]
-    leaks = {}
+    leaks, leak_rays = {}, {}
     for r in srecs:
         leaks[r["accel"]] = leaks.get(r["accel"], 0) + int(r.get("leaks", 0) or 0)
-        if r.get("ratio_to_embree") and r["accel"] not in speed:
-            speed[r["accel"]] = r["ratio_to_embree"]
+        leak_rays[r["accel"]] = leak_rays.get(r["accel"], 0) + int(r.get("leak_rays", 0) or 0)
 
-    panels = 1 + (1 if terr else 0) + (1 if srecs else 0)
-    fig, axes = plt.subplots(1, panels, figsize=(6.0 * panels, 4.8), squeeze=False, constrained_layout=True)
-    names = sorted(set(speed) | set(disagree) | set(terr) | set(leaks))
-    colour = {k: f"C{i % 10}" for i, k in enumerate(names)}
-    ax = axes[0][0]
-    floor = 1e-7
-    for k in sorted(speed):
-        if k not in disagree:
-            continue
-        y = speed[k]
-        x = max(disagree[k], floor)
-        ax.scatter([x], [y], s=40, zorder=3, color=colour[k])
-        label = k if len(k) < 40 else k[:38] + ".."
-        if k in wrong:
-            label += f"  (wrong {wrong[k]:.1e})" if wrong[k] > 0 else "  (wrong 0)"
-        ax.annotate(label, (x, y), fontsize=7, xytext=(4, 3), textcoords="offset points")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.axvline(floor, color="lightgray", lw=0.8)
-    ax.set_xlabel(f"fraction of rays answered differently from Embree\n({source}, ties included; 0 drawn at {floor:g})")
-    ax.set_ylabel("speed: ratio to Embree (geomean, 1 thread)")
-    ax.set_title("Speed against accuracy" + (" (wrong = oracle says the accelerator erred)" if wrong else ""), fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
+    panels = [("disagree", disagree, f"fraction of rays answered differently from Embree ({source}, ties included)", 1e-6)]
     if terr:
-        ax = axes[0][1]
-        for k in sorted(terr):
-            if k not in speed:
-                continue
-            x = max(terr[k], 1e-9)
-            ax.scatter([x], [speed[k]], s=40, zorder=3, color=colour[k])
-            ax.annotate(k if len(k) < 40 else k[:38] + "..", (x, speed[k]), fontsize=7, xytext=(4, 3),
-                        textcoords="offset points")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("largest relative hit-distance difference from Embree\n(raylab verify, rays where both hit)")
-        ax.set_ylabel("speed: ratio to Embree")
-        ax.set_title("Speed against distance accuracy", fontsize=10)
-        ax.grid(True, which="both", alpha=0.3)
+        panels.append(("terr", terr, "largest relative hit-distance difference from Embree (raylab verify)", 1e-7))
     if srecs:
-        ax = axes[0][panels - 1]
-        for k in sorted(leaks):
-            if k not in speed:
+        lpm = {k: leaks[k] / leak_rays[k] * 1e6 if leak_rays.get(k) else 0.0 for k in leaks}
+        panels.append(("leaks", lpm, "watertight leaks per million rays (raylab stress)", 1.0))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels) + 2.5, 4.8), squeeze=False)
+    specs = sorted(speed)
+    handles = {}
+    for ax, (_, xs, xlabel, linthresh) in zip(axes[0], panels):
+        for k in specs:
+            if k not in xs:
                 continue
-            x = max(leaks[k], 0.5)
-            ax.scatter([x], [speed[k]], s=40, zorder=3, color=colour[k])
-            ax.annotate(k, (x, speed[k]), fontsize=7, xytext=(4, 3), textcoords="offset points")
-        ax.set_xscale("log")
+            st = style_of(k, specs)
+            label = k
+            if len(cover.get(k, ())) < len(all_scenes):
+                label += f" ({len(cover[k])} of {len(all_scenes)} scenes)"
+            if k in wrong:
+                label += f", wrong {wrong[k]:.1e}" if wrong[k] > 0 else ", wrong 0"
+            h = ax.scatter([xs[k]], [speed[k]], s=45, zorder=3, color=st["color"], marker=st["marker"],
+                           edgecolors="black", linewidths=0.4, label=label)
+            handles.setdefault(label, h)
+        ax.set_xscale("symlog", linthresh=linthresh)
+        ax.set_xlim(left=0)
         ax.set_yscale("log")
-        ax.set_xlabel("watertight leaks in raylab stress (0 drawn at 0.5)")
-        ax.set_ylabel("speed: ratio to Embree")
-        ax.set_title("Speed against leaks")
+        log_ticks(ax, "y")
+        ax.set_xlabel(xlabel, fontsize=8)
+        ax.set_ylabel("speed: ratio to Embree (geomean, 1 thread)")
+        ax.axhline(1.0, color="gray", lw=0.8, ls="--")
         ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].set_title("Speed against accuracy (0 = no disagreement; symmetric-log x axis)", fontsize=9)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=7)
+    fig.tight_layout()
     footer(fig, header)
     save(fig, out, "speed_vs_accuracy", written)
 
 
+def chart_speed_vs_memory(bench, out, written, header):
+    """Every structure's speed (ratio to Embree, geomean over scenes and ray sets, 1 thread,
+    whiskers from the slowest and fastest repeats) against its memory (bytes per triangle,
+    geomean over scenes): the trade-off in one picture."""
+    recs = single_thread(bench)
+    by = {}
+    for r in recs:
+        by.setdefault(r["accel"], []).append(r)
+    if not by:
+        return False
+    specs = sorted(by)
+    fig, ax = plt.subplots(figsize=(8.5, 5))
+    for k in specs:
+        rs = by[k]
+        x = geomean([r.get("bytes_per_triangle") for r in rs])
+        y = geomean([r["ratio_to_embree"] for r in rs])
+        lo = geomean([ratio_range(r)[0] for r in rs])
+        hi = geomean([ratio_range(r)[1] for r in rs])
+        st = style_of(k, specs)
+        yerr = [[max(y - lo, 0)], [max(hi - y, 0)]] if lo == lo and hi == hi else None
+        ax.errorbar([x], [y], yerr=yerr, fmt=st["marker"], color=st["color"], ms=7, mec="black", mew=0.4,
+                    capsize=3, label=k)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    log_ticks(ax)
+    ax.axhline(1.0, color="gray", lw=0.8, ls="--")
+    ax.set_xlabel("memory: bytes per triangle (geomean over scenes)")
+    ax.set_ylabel("speed: ratio to Embree (geomean, 1 thread)\nwhiskers: slowest-fastest repeat")
+    ax.set_title("Speed against memory, every structure", fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    footer(fig, header)
+    save(fig, out, "speed_vs_memory", written)
+    return True
+
+
 def chart_build_vs_trace(bench, out, written, header):
-    """Total time (build + trace) against the number of rays, one line per accelerator."""
+    """Build plus trace time against rays traced, one line per accelerator. A MODEL: each
+    line is build_ms + rays / (measured Mrays/s), drawn solid up to the rays the bench
+    actually traced per repeat and dotted beyond (an extrapolation). Every line has its own
+    marker and dash, so lines that coincide stay visible."""
     recs = single_thread(bench)
     scenes = sorted({r["scene"] for r in recs}, key=lambda s: max(r["triangles"] for r in recs if r["scene"] == s))
     scene = scenes[-1]
     sets = [r["ray_set"] for r in recs if r["scene"] == scene]
     ray_set = "diffuse" if "diffuse" in sets else sets[0]
-    sel = [r for r in recs if r["scene"] == scene and r["ray_set"] == ray_set]
-    n = np.logspace(2, 10, 200)
-    fig, ax = plt.subplots(figsize=(7, 4.8))
+    sel = [r for r in recs if r["scene"] == scene and r["ray_set"] == ray_set and r["mrays_per_s"] > 0]
+    specs = sorted(r["accel"] for r in sel)
+    n = np.logspace(2, 9, 120)
+    fig, ax = plt.subplots(figsize=(8.5, 5))
     for r in sorted(sel, key=lambda r: r["accel"]):
-        if r["mrays_per_s"] <= 0:
-            continue
+        st = style_of(r["accel"], specs)
         total = r["build_ms"] * 1e-3 + n / (r["mrays_per_s"] * 1e6)
-        ax.plot(n, total, label=f"{r['accel']} (build {r['build_ms']:.1f} ms, {r['mrays_per_s']:.1f} Mrays/s)")
+        measured = n <= max(r.get("rays", 0), 1)
+        ax.plot(n[measured], total[measured], color=st["color"], ls=st["ls"], lw=1.6)
+        ax.plot(n[~measured], total[~measured], color=st["color"], ls=":", lw=1.0)
+        ax.plot(n[::12], total[::12], color=st["color"], marker=st["marker"], ls="none", ms=4,
+                label=f"{r['accel']} (build {fmt_ms(r['build_ms'])} ms, {r['mrays_per_s']:.2f} Mrays/s)")
     ax.set_xscale("log")
     ax.set_yscale("log")
+    log_ticks(ax)
     ax.set_xlabel(f"rays traced ({ray_set} rays)")
-    ax.set_ylabel("build + trace time (s), 1 thread")
-    ax.set_title(f"Build against trace: {scene} ({sel[0]['triangles'] if sel else 0} triangles)")
+    ax.set_ylabel("model: build + rays / measured speed (s), 1 thread")
+    ax.set_title(f"Build against trace, a model from measured build time and speed: {scene} "
+                 f"({sel[0]['triangles'] if sel else 0} triangles)\nsolid: up to the rays measured; dotted: extrapolated",
+                 fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
     footer(fig, header)
     save(fig, out, "build_vs_trace", written)
 
 
-def sweep_chart(recs, names, param, out, name, title, xlabel, written, header, mark=None, xfun=None, second=None):
-    """One line per (accelerator, ray set): ratio to Embree against a parameter."""
+def swept_parameters(recs):
+    """{(structure, param): [records]} for every parameter whose value varies among one
+    structure's records (the sweeps found in the records, whatever the config names)."""
+    by_name = {}
+    for r in recs:
+        by_name.setdefault(parse_spec(r["accel"])[0], []).append(r)
+    found = {}
+    for name, rs in by_name.items():
+        keys = set()
+        for r in rs:
+            keys |= set(parse_spec(r["accel"])[1])
+        for k in sorted(keys):
+            values = {parse_spec(r["accel"])[1].get(k) for r in rs}
+            if len(values - {None}) >= 2:
+                found.setdefault(k, []).extend(rs)
+    return found
+
+
+def numeric(v):
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def chart_sweep(recs, param, out, written, header):
+    """One chart per swept parameter: ratio to Embree (error bars: slowest-fastest repeat)
+    and the work per ray (nodes or triangle tests) against the parameter, one line per
+    (configuration without the parameter, ray set)."""
     lines = {}
     for r in single_thread(recs):
-        acc, params = parse_spec(r["accel"])
-        if acc not in names:
+        name, params = parse_spec(r["accel"])
+        if param not in params or numeric(params[param]) is None:
             continue
-        x = xfun(params) if xfun else (float(params[param]) if param in params else None)
-        if x is None:
-            continue
-        rest = ",".join(f"{k}={v}" for k, v in sorted(params.items()) if k not in (param, "ct", "ci"))
-        lines.setdefault((acc + (":" + rest if rest else ""), r["ray_set"]), []).append((x, r))
+        rest = ",".join(f"{k}={v}" for k, v in sorted(params.items()) if k != param)
+        lines.setdefault((name + (":" + rest if rest else ""), r["ray_set"]), []).append((numeric(params[param]), r))
     lines = {k: sorted(v, key=lambda p: p[0]) for k, v in lines.items() if len({p[0] for p in v}) >= 2}
     if not lines:
         return False
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
+    specs = sorted({k[0] for k in lines})
+    sets = sorted({k[1] for k in lines})
+    work_key = "tris_per_ray" if param in ("leaf",) else "nodes_per_ray"
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
     for (acc, rs), pts in sorted(lines.items()):
+        st = style_of(acc, specs)
+        ls = LINESTYLES[sets.index(rs) % len(LINESTYLES)]
         xs = [p[0] for p in pts]
-        axes[0].plot(xs, [p[1]["ratio_to_embree"] for p in pts], marker="o", ms=3, label=f"{acc} {rs}")
-        yfun, ylabel = second
-        axes[1].plot(xs, [yfun(p[1]) for p in pts], marker="o", ms=3, label=f"{acc} {rs}")
-    axes[0].set_ylabel("ratio to Embree (1 thread)")
-    axes[1].set_ylabel(second[1])
+        rr = [p[1] for p in pts]
+        vals, yerr = error_bars(rr, lambda r: r["ratio_to_embree"], lambda r: ratio_range(r)[0], lambda r: ratio_range(r)[1])
+        axes[0].errorbar(xs, vals, yerr=yerr, color=st["color"], marker=st["marker"], ls=ls, ms=4, capsize=2,
+                         label=f"{acc} {rs}")
+        axes[1].plot(xs, [max(r.get(work_key) or 0, 1e-3) for r in rr], color=st["color"], marker=st["marker"], ls=ls, ms=4)
+        axes[2].plot(xs, [r.get("bytes_per_triangle") or float("nan") for r in rr], color=st["color"],
+                     marker=st["marker"], ls=ls, ms=4)
+    axes[0].set_ylabel("ratio to Embree (1 thread)\nbars: slowest-fastest repeat")
+    axes[1].set_ylabel(work_key.replace("_", " "))
+    axes[2].set_ylabel("bytes per triangle")
+    xs_all = sorted({p[0] for pts in lines.values() for p in pts})
     for ax in axes:
-        ax.set_xscale("log", base=2)
-        ax.set_xlabel(xlabel)
+        if xs_all[0] > 0 and xs_all[-1] / xs_all[0] >= 8:
+            ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        log_ticks(ax, "y")
+        ax.set_xlabel(param)
         ax.grid(True, which="both", alpha=0.3)
-        if mark is not None:
-            ax.axvline(mark[0], color="red", ls="--", lw=1)
-            ax.annotate(mark[1], (mark[0], 0.98), xycoords=("data", "axes fraction"), color="red", fontsize=8,
-                        xytext=(3, -10), textcoords="offset points")
-    axes[1].set_yscale("log")
     axes[0].legend(fontsize=7)
-    scene = recs[0]["scene"] if recs else ""
-    fig.suptitle(f"{title} ({scene})")
+    scenes = sorted({r["scene"] for pts in lines.values() for _, r in pts})
+    fig.suptitle(f"Sweep of {param} ({', '.join(scenes)})")
     footer(fig, header)
-    save(fig, out, name, written)
+    save(fig, out, f"sweep_{param}", written)
     return True
 
 
@@ -280,17 +407,17 @@ def chart_scaling(recs, out, written, header):
     has_rss = any(r.get("rss_peak_bytes") for r in recs)
     fig, axes = plt.subplots(1, 3 if has_rss else 2, figsize=(18 if has_rss else 12, 4.8))
     all_n = sorted({r["triangles"] for r in recs if family(r["scene"]) == fams[0]})
-    colors = {}
     for (acc, fam), rs in sorted(by_acc.items(), key=lambda kv: (fams.index(kv[0][1]), kv[0][0])):
         rs = sorted(rs, key=lambda r: r["triangles"])
         n = [r["triangles"] for r in rs]
         style = dict(marker="o" if fam == fams[0] else "s", ms=3, ls="-" if fam == fams[0] else "--",
                      label=acc if fam == fams[0] else f"{acc} ({fam})")
-        if acc in colors:
-            style["color"] = colors[acc]
-        line, = axes[0].plot(n, [1e3 / r["mrays_per_s"] if r["mrays_per_s"] > 0 else float("nan") for r in rs], **style)
-        colors.setdefault(acc, line.get_color())
-        style["color"] = colors[acc]
+        style["color"] = colour_of(acc)
+        ns = [1e3 / r["mrays_per_s"] if r["mrays_per_s"] > 0 else float("nan") for r in rs]
+        # Error bars: time per ray of the fastest and slowest repeats.
+        below = [max(v - 1e3 / r["mrays_max"], 0) if r.get("mrays_max") else 0 for v, r in zip(ns, rs)]
+        above = [max(1e3 / r["mrays_min"] - v, 0) if r.get("mrays_min") else 0 for v, r in zip(ns, rs)]
+        axes[0].errorbar(n, ns, yerr=[below, above], capsize=2, **style)
         axes[1].plot(n, [max(r["build_ms"], 1e-3) for r in rs], **style)
         if has_rss:
             axes[2].plot(n, [r.get("rss_peak_bytes", 0) / 2**30 or float("nan") for r in rs], **style)
@@ -309,6 +436,7 @@ def chart_scaling(recs, out, written, header):
     for ax in axes:
         ax.set_xscale("log")
         ax.set_yscale("log")
+        log_ticks(ax)
         ax.set_xlabel(f"triangles ({', '.join(fams)})")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
@@ -355,7 +483,7 @@ def chart_equal_time(render_files, out, written):
     fig, ax = plt.subplots(figsize=(7, 4.8))
     for acc, pts in sorted(curves.items()):
         pts.sort()
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", ms=3, label=acc)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", ms=3, label=acc, color=colour_of(acc))
     last = sorted(curves.items())[0][1]
     for wall, err, spp in last:
         ax.annotate(f"{spp} spp", (wall, err), fontsize=6, xytext=(3, 3), textcoords="offset points", color="gray")
@@ -365,7 +493,7 @@ def chart_equal_time(render_files, out, written):
     ax.set_ylabel("RMSE against the reference image")
     ref_rec = refs[0]
     ax.set_title(f"Equal-time rendering: {ref_rec['scene']} {ref_rec['width']}x{ref_rec['height']} "
-                 f"(reference {ref_rec['accel']} {ref_rec['spp']} spp)", fontsize=9)
+                 f"(reference {ref_rec['accel']} {ref_rec['spp']} spp)\none render per point, build included", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     save(fig, out, "equal_time", written)
@@ -486,11 +614,16 @@ def main():
         with open(a.memory_table + ".tmp", "w") as f:
             f.write(markdown_memory_table(load(a.scaling)))
         os.replace(a.memory_table + ".tmp", a.memory_table)
+    reg = registry(a.raylab)
+    for entry in reg or []:
+        if entry.get("colour"):
+            REGISTRY_COLOURS[entry["name"]] = entry["colour"]
     header = load(a.bench) if a.bench else {}
     bench = records(a.bench) if a.bench else []
     if bench:
         chart_speed_vs_accuracy(bench, a.verify, a.stress, out, written, header)
         chart_build_vs_trace(bench, out, written, header)
+        chart_speed_vs_memory(bench, out, written, header)
         if a.table:
             os.makedirs(os.path.dirname(os.path.abspath(a.table)), exist_ok=True)
             with open(a.table + ".tmp", "w") as f:
@@ -499,35 +632,15 @@ def main():
                     f.write(markdown_scaling_table(records(a.scaling)))
             os.replace(a.table + ".tmp", a.table)
     else:
-        skipped += ["speed_vs_accuracy", "build_vs_trace"]
+        skipped += ["speed_vs_accuracy", "build_vs_trace", "speed_vs_memory"]
     sweep = [r for f in a.sweep for r in records(f)]
     sweep_header = load(a.sweep[0]) if a.sweep else {}
-    reg = registry(a.raylab)
-    if not sweep_chart(sweep, with_param(reg, "density", sweep), "density", out, "density_sweep",
-                       "Grid density sweep", "density (cells per triangle; 1 = the n^(1/3) rule)", written,
-                       sweep_header, mark=(1.0, "n^(1/3) rule"),
-                       second=(lambda r: r["bytes_per_triangle"], "bytes per triangle")):
-        skipped.append("density_sweep")
-
-    def kd_ratio(p):
-        if "ct" not in p and "ci" not in p:
-            return None
-        return float(p.get("ct", 15)) / float(p.get("ci", 20))
-
-    # The k-d tree's SAH constants: the structures declaring empty_bonus (ct/ci mean other things elsewhere).
-    if not sweep_chart(sweep, with_param(reg, "empty_bonus", sweep), None, out, "kdtree_cost_sweep", "k-d tree cost constants",
-                       "traversal / intersection cost ratio ct/ci (default 15/20)", written, sweep_header,
-                       mark=(0.75, "default"), xfun=kd_ratio,
-                       second=(lambda r: max(r["nodes_per_ray"], 1e-3), "nodes visited per ray")):
-        skipped.append("kdtree_cost_sweep")
-    # Leaf size of the BVH family: the structures declaring both leaf and layout.
-    bvh_like = with_param(reg, "leaf", sweep)
-    if reg is not None:
-        bvh_like &= with_param(reg, "layout", sweep)
-    if not sweep_chart(sweep, bvh_like, "leaf", out, "bvh_leaf_sweep", "BVH leaf size", "max triangles per leaf",
-                       written, sweep_header,
-                       second=(lambda r: max(r["tris_per_ray"], 1e-3), "triangle tests per ray")):
-        skipped.append("bvh_leaf_sweep")
+    params = swept_parameters(sweep)
+    if not params:
+        skipped.append("sweep_*")
+    for param in sorted(params):
+        if not chart_sweep(params[param], param, out, written, sweep_header):
+            skipped.append(f"sweep_{param}")
     if a.scaling and records(a.scaling):
         chart_scaling(records(a.scaling), out, written, load(a.scaling))
     else:

@@ -8,6 +8,7 @@
 #include "accel/registry.h"
 #include "base/atomic_file.h"
 #include "tracer/trace.h"
+#include "raylab_build_revision.h"
 
 #ifndef RAYLAB_SOURCE_DIR
 #define RAYLAB_SOURCE_DIR "."
@@ -30,17 +31,10 @@ std::string cpu_model() {
   return "unknown";
 }
 
-std::string git_revision() {
-  std::string cmd = std::string("git -C '") + RAYLAB_SOURCE_DIR + "' describe --always --dirty 2>/dev/null";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return "unknown";
-  char buf[128] = {0};
-  std::string out;
-  if (fgets(buf, sizeof buf, p)) out = buf;
-  pclose(p);
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out.empty() ? "unknown" : out;
-}
+// The revision of the source this binary was built from (`git describe
+// --always --dirty` at build time, cmake/write_build_revision.cmake), not of
+// whatever the checkout holds when the binary runs.
+std::string git_revision() { return RAYLAB_BUILD_REVISION; }
 
 nlohmann::json report_header(const std::string& command) {
   const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());

@@ -151,11 +151,13 @@ Material material_from(const aiMaterial* am) {
 }
 
 // The first camera of the file, placed by its node's world transform.
-// Assimp documents mHorizontalFOV as half the horizontal angle and the camera
-// fields as relative to its node. Its 5.2 glTF 2 importer departs from both:
-// it copies the node's translation into mPosition (so it would count twice)
-// and stores yfov x aspect as mHorizontalFOV. raylab's views take the full
-// vertical angle.
+// Assimp (5.2) documents mHorizontalFOV as half the horizontal angle, but its
+// importers store the full angle (Collada, FBX, Blender, 3DS; assimp issue
+// #2256, whose fix changed the comment to "horizontal field of view"): a
+// Collada yfov of 37.8 degrees at aspect 1.5 arrives as 54.4 degrees. The
+// glTF 2 importer departs further: it copies the node's translation into
+// mPosition (so it would count twice) and stores yfov x aspect. raylab's
+// views take the full vertical angle.
 void store_first_camera(const aiScene* ai, ImportHeader& h, bool gltf) {
   if (ai->mNumCameras == 0 || !ai->mCameras[0]) return;
   const aiCamera* cam = ai->mCameras[0];
@@ -168,7 +170,7 @@ void store_first_camera(const aiScene* ai, ImportHeader& h, bool gltf) {
   const aiVector3D up = rot * cam->mUp;
   const float aspect = cam->mAspect > 0 ? cam->mAspect : 1.0f;
   const float hfov = cam->mHorizontalFOV > 0 ? cam->mHorizontalFOV : 0.785398f;
-  const float vfov_rad = gltf ? hfov / aspect : 2.0f * std::atan(std::tan(hfov) / aspect);
+  const float vfov_rad = gltf ? hfov / aspect : 2.0f * std::atan(std::tan(0.5f * hfov) / aspect);
   const float vfov = vfov_rad * 180.0f / 3.14159265f;
   const float values[] = {from.x, from.y, from.z, from.x + dir.x, from.y + dir.y, from.z + dir.z, up.x, up.y, up.z, vfov};
   for (float v : values)

@@ -1,9 +1,7 @@
 #include "scenes/procedural.h"
 #include "scenes/library.h"
 
-#include <algorithm>
-#include <cmath>
-#include <random>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -11,125 +9,36 @@ namespace raylab {
 
 namespace {
 
-// Deterministic uniform float in [0, 1) from a 64-bit engine (the standard
-// distributions are not specified bit-for-bit across library versions).
-float uniform01(std::mt19937_64& rng) { return static_cast<float>(rng() >> 40) * 0x1p-24f; }
+// A bare mesh as a procedural scene: one default material, framed by its
+// bounds, under a white sky.
+Scene finish_scene(std::string name, TriangleMesh mesh, const Aabb& frame) {
+  Scene s;
+  s.name = std::move(name);
+  s.mesh = std::move(mesh);
+  s.materials = {Material{}};
+  s.material_ids.assign(s.mesh.num_triangles(), 0);
+  s.view = frame_bounds(frame);
+  s.background = Vec3f::Constant(1.0f);
+  return s;
+}
 
 }  // namespace
 
 Scene make_triangle_soup(size_t n, uint64_t seed, float size) {
-  Scene s;
-  s.name = fmt::format("soup:n={},seed={}", n, seed);
-  std::mt19937_64 rng(seed);
-  // Triangles whose extent is about `size` times the mean spacing of n
-  // points in the unit cube, so density stays comparable across n.
-  const float extent = size * 2.0f / std::cbrt(static_cast<float>(std::max<size_t>(n, 1)));
-  s.mesh.vertices.reserve(3 * n);
-  s.mesh.triangles.reserve(n);
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3f c(uniform01(rng), uniform01(rng), uniform01(rng));
-    const auto base = static_cast<uint32_t>(s.mesh.vertices.size());
-    for (int k = 0; k < 3; ++k) {
-      const Vec3f d(uniform01(rng) - 0.5f, uniform01(rng) - 0.5f, uniform01(rng) - 0.5f);
-      Vec3f p = c + extent * d;
-      p = p.cwiseMax(Vec3f::Zero()).cwiseMin(Vec3f::Ones());
-      s.mesh.vertices.push_back(p);
-    }
-    s.mesh.triangles.push_back({base, base + 1, base + 2});
-  }
-  s.materials = {Material{}};
-  s.material_ids.assign(n, 0);
-  s.view = frame_bounds(Aabb(Vec3f::Zero(), Vec3f::Ones()));
-  s.background = Vec3f::Constant(1.0f);
-  return s;
+  return finish_scene(fmt::format("soup:n={},seed={}", n, seed), triangle_soup_mesh(n, seed, size),
+                      Aabb(Vec3f::Zero(), Vec3f::Ones()));
 }
-
-namespace {
-
-Scene finish_scene(Scene s) {
-  s.materials = {Material{}};
-  s.material_ids.assign(s.mesh.num_triangles(), 0);
-  s.view = frame_bounds(s.mesh.bounds());
-  s.background = Vec3f::Constant(1.0f);
-  return s;
-}
-
-}  // namespace
 
 Scene make_triangle_copies(size_t n) {
-  Scene s;
-  s.name = fmt::format("copies:n={}", n);
-  const Vec3f a(0.1f, 0.2f, 0.3f), b(0.9f, 0.35f, 0.5f), c(0.4f, 0.85f, 0.7f);
-  for (size_t i = 0; i < n; ++i) {
-    const auto base = static_cast<uint32_t>(s.mesh.vertices.size());
-    s.mesh.vertices.insert(s.mesh.vertices.end(), {a, b, c});
-    s.mesh.triangles.push_back({base, base + 1, base + 2});
-  }
-  return finish_scene(std::move(s));
+  TriangleMesh m = triangle_copies_mesh(n);
+  const Aabb frame = m.bounds();
+  return finish_scene(fmt::format("copies:n={}", n), std::move(m), frame);
 }
 
 Scene make_coplanar_scene(size_t n, int grid, int axis, uint64_t seed) {
-  Scene s;
-  s.name = fmt::format("coplanar:n={},grid={},axis={},seed={}", n, grid, axis, seed);
-  // (u, v) in the unit square -> point in the plane coordinate[axis] = 0.5.
-  auto point = [axis](float u, float v) {
-    Vec3f p;
-    p[axis] = 0.5f;
-    p[(axis + 1) % 3] = u;
-    p[(axis + 2) % 3] = v;
-    return p;
-  };
-  for (int j = 0; grid > 0 && j <= grid; ++j)
-    for (int i = 0; i <= grid; ++i)
-      s.mesh.vertices.push_back(point(static_cast<float>(i) / grid, static_cast<float>(j) / grid));
-  auto vid = [grid](int i, int j) { return static_cast<uint32_t>(j * (grid + 1) + i); };
-  for (int j = 0; j < grid; ++j)
-    for (int i = 0; i < grid; ++i) {
-      s.mesh.triangles.push_back({vid(i, j), vid(i + 1, j), vid(i + 1, j + 1)});
-      s.mesh.triangles.push_back({vid(i, j), vid(i + 1, j + 1), vid(i, j + 1)});
-    }
-  std::mt19937_64 rng(seed);
-  const float extent = 2.0f / std::sqrt(static_cast<float>(std::max<size_t>(n, 1)));
-  for (size_t t = 0; t < n; ++t) {
-    const float cu = uniform01(rng), cv = uniform01(rng);
-    const auto base = static_cast<uint32_t>(s.mesh.vertices.size());
-    for (int k = 0; k < 3; ++k) {
-      const float u = std::clamp(cu + extent * (uniform01(rng) - 0.5f), 0.0f, 1.0f);
-      const float v = std::clamp(cv + extent * (uniform01(rng) - 0.5f), 0.0f, 1.0f);
-      s.mesh.vertices.push_back(point(u, v));
-    }
-    s.mesh.triangles.push_back({base, base + 1, base + 2});
-  }
-  return finish_scene(std::move(s));
-}
-
-TriangleMesh make_uv_sphere(int segments, int rings, const Vec3f& center, float radius) {
-  segments = std::max(3, segments);
-  rings = std::max(2, rings);
-  TriangleMesh m;
-  m.vertices.push_back(center + Vec3f(0, radius, 0));  // north pole
-  for (int r = 1; r < rings; ++r) {
-    const double theta = M_PI * r / rings;
-    for (int s = 0; s < segments; ++s) {
-      const double phi = 2.0 * M_PI * s / segments;
-      const Vec3f d(static_cast<float>(std::sin(theta) * std::cos(phi)), static_cast<float>(std::cos(theta)),
-                    static_cast<float>(std::sin(theta) * std::sin(phi)));
-      m.vertices.push_back(center + radius * d);
-    }
-  }
-  m.vertices.push_back(center - Vec3f(0, radius, 0));  // south pole
-  const auto south = static_cast<uint32_t>(m.vertices.size() - 1);
-  auto ring_vertex = [&](int r, int s) { return static_cast<uint32_t>(1 + (r - 1) * segments + (s % segments)); };
-  // Outward-facing winding (counter-clockwise seen from outside).
-  for (int s = 0; s < segments; ++s) m.triangles.push_back({0, ring_vertex(1, s + 1), ring_vertex(1, s)});
-  for (int r = 1; r < rings - 1; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const uint32_t a = ring_vertex(r, s), b = ring_vertex(r, s + 1), c = ring_vertex(r + 1, s), d = ring_vertex(r + 1, s + 1);
-      m.triangles.push_back({a, b, d});
-      m.triangles.push_back({a, d, c});
-    }
-  for (int s = 0; s < segments; ++s) m.triangles.push_back({south, ring_vertex(rings - 1, s), ring_vertex(rings - 1, s + 1)});
-  return m;
+  TriangleMesh m = coplanar_mesh(n, grid, axis, seed);
+  const Aabb frame = m.bounds();
+  return finish_scene(fmt::format("coplanar:n={},grid={},axis={},seed={}", n, grid, axis, seed), std::move(m), frame);
 }
 
 const std::vector<SceneGenerator>& scene_generators() {
@@ -175,13 +84,9 @@ const std::vector<SceneGenerator>& scene_generators() {
          const int seg = p.integer("segments"), rings = p.integer("rings");
          if (seg < 3 || rings < 2 || static_cast<long>(seg) * rings > 50'000'000L)
            throw SpecError("sphere: need segments >= 3, rings >= 2 and at most 5e7 cells");
-         Scene s;
-         s.mesh = make_uv_sphere(seg, rings);
-         s.materials = {Material{}};
-         s.material_ids.assign(s.mesh.num_triangles(), 0);
-         s.view = frame_bounds(s.mesh.bounds());
-         s.background = Vec3f::Constant(1.0f);
-         return s;
+         TriangleMesh m = make_uv_sphere(seg, rings);
+         const Aabb frame = m.bounds();
+         return finish_scene("", std::move(m), frame);
        }},
   };
   append_library_generators(list);  // scenes/library_*.cpp

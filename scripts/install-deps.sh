@@ -20,6 +20,8 @@ packages=(
   libgmp-dev         # exact arithmetic for the edge/vertex oracle
   clang libclang-rt-14-dev  # libFuzzer targets (scripts/fuzz.sh)
   python3-matplotlib # charts (run with /usr/bin/python3)
+  chromium           # headless browser: tests load `raylab report` pages and screenshot them
+  assimp-testmodels  # Assimp's sample files in many formats (scripts/render-testmodels.sh)
   snakemake          # the benchmark workflow (make bench, workflow/Snakefile)
   slurm-wlm munge    # a one-node Slurm cluster for the workflow's cluster test (make bench-slurm-local)
 )

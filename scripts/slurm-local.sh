@@ -144,11 +144,11 @@ run_test() {
   local t0 t1 t2
   t0=$(date +%s)
   say "local run: snakemake --cores $(nproc) -> $OUT_LOCAL"
-  snakemake -s workflow/Snakefile --cores "$(nproc)" --config raylab="$BUILD/raylab" out="$OUT_LOCAL" docs_charts=false -q
+  snakemake -s workflow/Snakefile --cores "$(nproc)" --config raylab="$BUILD/raylab" out="$OUT_LOCAL" -q
   t1=$(date +%s)
   say "Slurm run: snakemake --profile workflow/profiles/slurm -> $OUT_SLURM"
   snakemake -s workflow/Snakefile --profile workflow/profiles/slurm \
-    --config raylab="$BUILD/raylab" out="$OUT_SLURM" docs_charts=false -q
+    --config raylab="$BUILD/raylab" out="$OUT_SLURM" -q
   t2=$(date +%s)
   say "wall times: local $((t1 - t0)) s, Slurm $((t2 - t1)) s"
   /usr/bin/python3 workflow/scripts/compare_records.py "$OUT_LOCAL" "$OUT_SLURM"

@@ -1,18 +1,15 @@
-// Every registered accelerator against brute force and Embree: the same hits,
-// ids and distances on random soups and the Cornell box; occlusion consistent
-// with closest hit; invalid rays and empty scenes handled. New accelerators
-// are covered automatically through the registry.
+// Every registered accelerator against brute force: the same hits, ids and
+// distances on random soups and the Cornell box; occlusion consistent with
+// closest hit; invalid rays and empty scenes handled. New accelerators are
+// covered automatically through the registry. (Against Embree, through the
+// checks layer's oracle: tests/test_structures_verify.cpp.)
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cctype>
 
 #include "accel/registry.h"
-#include "tracer/ray_sets.h"
-#include "checks/classify.h"
-#include "checks/verify.h"
-#include "scenes/procedural.h"
-#include "scenes/scene_registry.h"
+#include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -44,84 +41,39 @@ class EveryAccelerator : public ::testing::TestWithParam<std::string> {};
 // triangle or (for coplanar/shared-edge ties) exactly the same distance.
 // Both use the same watertight test on the same vertices, so distances of
 // the same triangle are bit-identical.
-void expect_same_as_brute(const Scene& scene, const std::string& spec, const std::vector<Ray>& rays,
+void expect_same_as_brute(const test::NamedMesh& scene, const std::string& spec, const std::vector<Ray>& rays,
                           bool expect_hits = true) {
   auto accel = make_accelerator(spec);
-  auto brute = make_accelerator("brute");
   accel->build(scene.mesh);
-  brute->build(scene.mesh);
-  std::vector<Hit> a(rays.size()), b(rays.size());
-  std::vector<uint8_t> occ(rays.size());
-  accel->intersect(rays, a);
-  brute->intersect(rays, b);
-  accel->occluded(rays, occ);
-  size_t hits = 0, bad = 0;
-  for (size_t i = 0; i < rays.size(); ++i) {
-    hits += b[i].valid();
-    const bool same = a[i].valid() == b[i].valid() && (!a[i].valid() || a[i].prim == b[i].prim || a[i].t == b[i].t);
-    if (!same && bad++ < 5)
-      ADD_FAILURE() << spec << " ray " << i << ": got prim " << a[i].prim << " t " << a[i].t << ", brute prim "
-                    << b[i].prim << " t " << b[i].t;
-    if (a[i].valid() && a[i].prim == b[i].prim) {
-      EXPECT_EQ(a[i].u, b[i].u);
-      EXPECT_EQ(a[i].v, b[i].v);
-    }
-    EXPECT_EQ(static_cast<bool>(occ[i]), b[i].valid()) << spec << " occlusion, ray " << i;
-  }
-  EXPECT_EQ(bad, 0u) << spec << " on " << scene.name;
+  const test::Disagreement d =
+      test::compare_with_brute(*accel, test::brute_reference(scene.mesh, rays), rays, spec + " on " + scene.name);
+  EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << spec << " on " << scene.name;
   if (expect_hits) {
-    EXPECT_GT(hits, rays.size() / 20) << "ray set too easy: few hits on " << scene.name;
+    EXPECT_GT(d.reference_hits, rays.size() / 20) << "ray set too easy: few hits on " << scene.name;
   }
 }
 
 TEST_P(EveryAccelerator, AgreesWithBruteForceOnSoups) {
   for (size_t n : {1u, 7u, 300u, 5000u}) {
-    const Scene s = make_triangle_soup(n, 11 + n, n < 10 ? 20.0f : 1.0f);
-    auto ref = make_accelerator("brute");
-    ref->build(s.mesh);
-    RaySetOptions o;
-    o.jittered_primary = true;
-    o.primary_count = 3000;
-    o.random_count = 3000;
-    for (const auto& set : make_ray_sets(s, {"primary", "random"}, *ref, o))
-      expect_same_as_brute(s, GetParam(), set.rays, n >= 300);
+    const test::NamedMesh s = test::soup(n, 11 + n, n < 10 ? 20.0f : 1.0f);
+    expect_same_as_brute(s, GetParam(), test::camera_rays(s.mesh, 55, 55), n >= 300);
+    expect_same_as_brute(s, GetParam(), test::mesh_test_rays(s.mesh, 3000, n), n >= 300);
   }
 }
 
 TEST_P(EveryAccelerator, AgreesWithBruteForceOnCornellBox) {
-  const Scene s = make_cornell_box();
-  auto ref = make_accelerator("brute");
-  ref->build(s.mesh);
-  RaySetOptions o;
-  o.width = 64;
-  o.height = 64;
-  o.random_count = 5000;
-  for (const auto& set : make_ray_sets(s, {"primary", "random", "diffuse"}, *ref, o))
-    expect_same_as_brute(s, GetParam(), set.rays);
-}
-
-TEST_P(EveryAccelerator, AgreesWithEmbreeAfterArbitration) {
-  // Brute force is O(N) per ray: it gets a smaller soup.
-  const char* soup = GetParam() == "brute" ? "soup:n=2000,seed=3" : "soup:n=20000,seed=3";
-  for (const char* scene : {soup, "cornell", "sphere:segments=64,rings=32"}) {
-    VerifyOptions vo;
-    vo.rays = 20000;
-    vo.ray_sets = {"primary", "random", "diffuse", "shadow"};
-    const auto records = verify_accelerators(load_scene(scene), {GetParam()}, vo);
-    ASSERT_EQ(records.size(), 4u);
-    for (const auto& r : records) {
-      EXPECT_EQ(r.raylab_wrong, 0u) << r.accel << " " << scene << " " << r.ray_set;
-      EXPECT_EQ(r.occlusion_disagree, 0u) << r.accel << " " << scene << " " << r.ray_set;
-      EXPECT_LT(r.max_rel_t_err, 1e-3) << r.accel << " " << scene << " " << r.ray_set;
-      EXPECT_GT(r.rays, 1000u);
-    }
-  }
+  const test::NamedMesh s{"cornell", cornell_box_mesh()};
+  const std::vector<Ray> primary = test::camera_rays(s.mesh, 64, 64);
+  const test::BruteReference ref = test::brute_reference(s.mesh, primary);
+  expect_same_as_brute(s, GetParam(), primary);
+  expect_same_as_brute(s, GetParam(), test::mesh_test_rays(s.mesh, 5000, 1));
+  expect_same_as_brute(s, GetParam(), test::surface_rays(s.mesh, primary, ref.hits, 2));
 }
 
 TEST_P(EveryAccelerator, InvalidRaysMiss) {
-  const Scene s = make_triangle_soup(100, 5);
+  const TriangleMesh mesh = triangle_soup_mesh(100, 5);
   auto accel = make_accelerator(GetParam());
-  accel->build(s.mesh);
+  accel->build(mesh);
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   const std::vector<Ray> rays = {
       Ray(Vec3f(nan, 0.5f, 0.5f), Vec3f(1, 0, 0)),      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 0)),
@@ -171,21 +123,16 @@ TEST_P(EveryAccelerator, RejectsInvalidMesh) {
 }
 
 TEST_P(EveryAccelerator, CountersAreFilledByTheInstrumentedKernel) {
-  const Scene s = make_triangle_soup(2000, 9);
+  const TriangleMesh mesh = triangle_soup_mesh(2000, 9);
   auto a = make_accelerator(GetParam());
-  a->build(s.mesh);
-  auto ref = make_accelerator("brute");
-  ref->build(s.mesh);
-  RaySetOptions o;
-  o.width = 32;
-  o.height = 32;
-  const RaySet set = make_ray_sets(s, {"primary"}, *ref, o)[0];
-  std::vector<Hit> plain(set.rays.size()), counted(set.rays.size());
+  a->build(mesh);
+  const std::vector<Ray> rays = test::camera_rays(mesh, 32, 32);
+  std::vector<Hit> plain(rays.size()), counted(rays.size());
   TraversalStats stats;
-  a->intersect(set.rays, plain);
-  a->intersect(set.rays, counted, &stats);
+  a->intersect(rays, plain);
+  a->intersect(rays, counted, &stats);
   for (size_t i = 0; i < plain.size(); ++i) ASSERT_EQ(plain[i].prim, counted[i].prim);
-  EXPECT_EQ(stats.rays, set.rays.size());
+  EXPECT_EQ(stats.rays, rays.size());
   EXPECT_GT(stats.triangle_tests, 0u);
 }
 
@@ -193,7 +140,7 @@ INSTANTIATE_TEST_SUITE_P(Registry, EveryAccelerator, ::testing::ValuesIn(tested_
                          [](const auto& info) { return test_name(info.param); });
 
 TEST(Accelerator, BuildsOnceAndTracesNothingBefore) {
-  const Scene s = make_triangle_soup(100, 4);
+  const TriangleMesh mesh = triangle_soup_mesh(100, 4);
   for (const auto& spec : coverage_specs()) {
     auto a = make_accelerator(spec);
     // Before build(): misses, or an exception for structures that say so; never a crash.
@@ -202,16 +149,16 @@ TEST(Accelerator, BuildsOnceAndTracesNothingBefore) {
       EXPECT_FALSE(a->intersect1(r).valid()) << spec;
     } catch (const std::exception&) {
     }
-    a->build(s.mesh);
-    EXPECT_THROW(a->build(s.mesh), std::logic_error) << spec;
+    a->build(mesh);
+    EXPECT_THROW(a->build(mesh), std::logic_error) << spec;
   }
 }
 
 TEST(Registry, EveryStatisticIsDeclared) {
-  const Scene s = make_triangle_soup(500, 6);
+  const TriangleMesh mesh = triangle_soup_mesh(500, 6);
   for (const auto& spec : coverage_specs()) {
     const AcceleratorInfo& info = accelerator_info(Spec::parse(spec).name);
-    const BuildStats st = make_accelerator(spec)->build(s.mesh);
+    const BuildStats st = make_accelerator(spec)->build(mesh);
     for (const auto& [key, value] : st.extra) {
       bool declared = false;
       for (const auto& d : info.stats) declared |= d.key == key;
@@ -238,24 +185,6 @@ TEST(Registry, CoverageSpecsAllBuildAndNameTheirStructure) {
       EXPECT_NO_THROW(make_accelerator(info.name + ":" + info.caps.robust_variant));
     }
   }
-}
-
-TEST(Embree, AgreesWithBruteForceOnSoup) {
-  const Scene s = make_triangle_soup(3000, 2);
-  auto e = make_accelerator("embree:robust=1");
-  const BuildStats st = e->build(s.mesh);
-  auto b = make_accelerator("brute");
-  b->build(s.mesh);
-  RaySetOptions o;
-  o.random_count = 5000;
-  const RaySet set = make_ray_sets(s, {"random"}, *b, o)[0];
-  size_t disagree = 0;
-  for (const Ray& r : set.rays) {
-    const Hit x = e->intersect1(r), y = b->intersect1(r);
-    disagree += screen_closest(x, y) == Screen::Disagree;
-  }
-  EXPECT_LE(disagree, 2u);
-  EXPECT_GT(st.bytes, 3000u * 10);
 }
 
 }  // namespace

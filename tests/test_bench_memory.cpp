@@ -25,7 +25,9 @@ TEST(ProcessMemory, PeakFollowsATouchedAllocationAndResets) {
   ASSERT_GT(resident_bytes(), 0u);
   EXPECT_GE(peak_resident_bytes(), resident_bytes());
   // After a reset the peak is the current resident set (where supported).
-  if (reset_peak_resident()) EXPECT_LE(peak_resident_bytes(), resident_bytes() + (16u << 20));
+  if (reset_peak_resident()) {
+    EXPECT_LE(peak_resident_bytes(), resident_bytes() + (16u << 20));
+  }
   const size_t before = resident_bytes();
   constexpr size_t kBytes = 96u << 20;
   {
@@ -86,6 +88,21 @@ TEST(BenchMemory, StructuresThatDoNotFitAreSkippedWithTheEstimate) {
   EXPECT_THAT(skips[1].reason, HasSubstr("by its estimate"));
   EXPECT_GT(skips[1].estimated_bytes, 0u);
   EXPECT_EQ(skips[1].to_json().at("reason").get<std::string>(), skips[1].reason);
+}
+
+// A structure whose build fails on a valid scene (a grid whose memory budget
+// cannot hold the references, as hashgrid's default 1 GiB at 10^8 triangles):
+// a skip with the builder's message, and the structures after it still run.
+TEST(BenchMemory, BuildFailureIsASkipAndTheMatrixGoesOn) {
+  const Scene scene = load_scene("soup:n=2000");
+  std::vector<BenchSkip> skips;
+  const auto records = run_bench(scene, {"hashgrid:budget=0.001", "bvh"}, tiny_options(), {}, {},
+                                 [&](const BenchSkip& s) { skips.push_back(s); });
+  ASSERT_EQ(skips.size(), 1u);
+  EXPECT_EQ(skips[0].accel, "hashgrid:budget=0.001");
+  EXPECT_THAT(skips[0].reason, HasSubstr("build failed: hashgrid: a memory budget"));
+  ASSERT_FALSE(records.empty());
+  for (const auto& r : records) EXPECT_EQ(r.accel, "bvh");
 }
 
 // The same through the command line: exit 0, the skips in the JSON.

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <numeric>
 
@@ -24,8 +25,7 @@
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/registry.h"
-#include "tracer/ray_sets.h"
-#include "scenes/procedural.h"
+#include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -118,37 +118,33 @@ std::vector<std::string> family_specs() {
   return specs;
 }
 
+struct RaySet {
+  std::string name;
+  std::vector<Ray> rays;
+};
+
 struct Reference {
-  Scene scene;
+  test::NamedMesh scene;
   std::vector<RaySet> sets;
-  std::vector<std::vector<Hit>> hits;  // brute force, per set
+  std::vector<test::BruteReference> brute;  // per set
 };
 
 const std::vector<Reference>& references() {
   static const std::vector<Reference> refs = [] {
     std::vector<Reference> out;
-    std::vector<Scene> scenes;
-    scenes.push_back(make_triangle_soup(2500, 17));
-    scenes.push_back(make_triangle_soup(400, 5, 6.0f));  // long, heavily overlapping triangles
-    scenes.push_back(make_cornell_box());
-    Scene sphere = make_triangle_soup(1, 1);
-    sphere.mesh = make_uv_sphere(40, 20, Vec3f(0.5f, 0.5f, 0.5f), 0.4f);
-    sphere.name = "sphere";
-    scenes.push_back(sphere);
-    for (Scene& s : scenes) {
+    std::vector<test::NamedMesh> scenes;
+    scenes.push_back(test::soup(2500, 17));
+    scenes.push_back(test::soup(400, 5, 6.0f));  // long, heavily overlapping triangles
+    scenes.push_back({"cornell", cornell_box_mesh()});
+    scenes.push_back({"sphere", make_uv_sphere(40, 20, Vec3f(0.5f, 0.5f, 0.5f), 0.4f)});
+    for (test::NamedMesh& s : scenes) {
       Reference r;
-      auto brute = make_accelerator("brute");
-      brute->build(s.mesh);
-      RaySetOptions o;
-      o.jittered_primary = true;
-      o.primary_count = 1500;
-      o.random_count = 1500;
-      r.sets = make_ray_sets(s, {"primary", "random", "diffuse"}, *brute, o);
-      for (const RaySet& set : r.sets) {
-        std::vector<Hit> h(set.rays.size());
-        brute->intersect(set.rays, h);
-        r.hits.push_back(std::move(h));
-      }
+      std::vector<Ray> primary = test::camera_rays(s.mesh, 40, 40);
+      const test::BruteReference first = test::brute_reference(s.mesh, primary);
+      std::vector<Ray> diffuse = test::surface_rays(s.mesh, primary, first.hits, 3);
+      r.sets = {{"primary", std::move(primary)}, {"random", test::segment_rays(s.mesh, 1500, 7)},
+                {"diffuse", std::move(diffuse)}};
+      for (const RaySet& set : r.sets) r.brute.push_back(test::brute_reference(s.mesh, set.rays));
       r.scene = std::move(s);
       out.push_back(std::move(r));
     }
@@ -169,30 +165,12 @@ TEST_P(BvhFamily, AgreesWithBruteForce) {
     EXPECT_TRUE(std::isfinite(st.sah_cost) && st.sah_cost > 0.0) << GetParam();
     size_t hits = 0;
     for (size_t s = 0; s < ref.sets.size(); ++s) {
-      const auto& rays = ref.sets[s].rays;
-      const auto& want = ref.hits[s];
-      std::vector<Hit> got(rays.size());
-      std::vector<uint8_t> occ(rays.size());
-      accel->intersect(rays, got);
-      accel->occluded(rays, occ);
-      size_t bad = 0;
-      for (size_t i = 0; i < rays.size(); ++i) {
-        hits += want[i].valid();
-        // Same watertight test on the same vertices: the same triangle gives
-        // bit-identical results; a different one must be an exact tie.
-        const bool same = got[i].valid() == want[i].valid() &&
-                          (!got[i].valid() || got[i].prim == want[i].prim || got[i].t == want[i].t);
-        if (!same && bad++ < 3)
-          ADD_FAILURE() << GetParam() << " " << ref.scene.name << " " << ref.sets[s].name << " ray " << i << ": prim "
-                        << got[i].prim << " t " << got[i].t << ", brute prim " << want[i].prim << " t " << want[i].t;
-        if (got[i].valid() && got[i].prim == want[i].prim) {
-          EXPECT_EQ(got[i].t, want[i].t);
-          EXPECT_EQ(got[i].u, want[i].u);
-          EXPECT_EQ(got[i].v, want[i].v);
-        }
-        EXPECT_EQ(occ[i] != 0, want[i].valid()) << GetParam() << " occlusion vs closest hit, ray " << i;
-      }
-      EXPECT_EQ(bad, 0u) << GetParam() << " on " << ref.scene.name << " " << ref.sets[s].name;
+      // Overlapping coplanar triangles (the size-6 soup, clamped to the unit
+      // cube's faces) tie up to rounding of the coordinates: 1e-6.
+      const std::string what = GetParam() + " " + ref.scene.name + " " + ref.sets[s].name;
+      const test::Disagreement d = test::compare_with_brute(*accel, ref.brute[s], ref.sets[s].rays, what, 1e-6f);
+      EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << what;
+      hits += d.reference_hits;
     }
     EXPECT_GT(hits, 300u) << "the ray sets must hit something on " << ref.scene.name;
   }
@@ -229,7 +207,7 @@ INSTANTIATE_TEST_SUITE_P(Combinations, BvhFamily, ::testing::ValuesIn(family_spe
 });
 
 TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
-  const Scene s = make_triangle_soup(1000, 3);
+  const test::NamedMesh s = test::soup(1000, 3);
   for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2"}) {
     auto a = make_accelerator(spec);
     const BuildStats st = a->build(s.mesh);
@@ -272,6 +250,7 @@ TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {
       ASSERT_TRUE(h.valid()) << spec;
       EXPECT_EQ(h.t, 1.0f) << spec;
       EXPECT_EQ(m.triangles[h.prim][0], 0u) << spec;
+      EXPECT_EQ(h.prim, 0u) << spec << ": exact ties go to the lowest primitive id (HitRecorder)";
       EXPECT_TRUE(a->occluded1(Ray(Vec3f(0.2f, 0.2f, 3), Vec3f(0, 0, -1)))) << spec;
     }
     const BinaryBvh t = build_with(b, m);
@@ -283,7 +262,7 @@ TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {
 // Builders and the wide collapse
 
 TEST(BvhBuilders, BinaryTreesHoldEveryTriangleOnceInsideEnclosingBoxes) {
-  const Scene s = make_triangle_soup(3000, 23);
+  const test::NamedMesh s = test::soup(3000, 23);
   for (const char* b : {"binned", "sweep", "lbvh", "reinsert"}) {
     SCOPED_TRACE(b);
     check_binary_tree(build_with(b, s.mesh), s.mesh, false);
@@ -295,7 +274,7 @@ TEST(BvhBuilders, BinaryTreesHoldEveryTriangleOnceInsideEnclosingBoxes) {
 TEST(BvhBuilders, SweepIsNoWorseThanBinnedAndLbvhNoBetter) {
   // The full sweep evaluates a superset of the binned candidates at each
   // node; LBVH ignores the SAH. Compared on a clustered scene.
-  const Scene s = make_triangle_soup(4000, 31);
+  const test::NamedMesh s = test::soup(4000, 31);
   const double binned = tree_sah_cost(build_with("binned", s.mesh).nodes);
   const double sweep = tree_sah_cost(build_with("sweep", s.mesh).nodes);
   const double lbvh = tree_sah_cost(build_with("lbvh", s.mesh).nodes);
@@ -352,7 +331,7 @@ double greedy_cost(const BinaryBvh& t, const CollapseOptions& o, const std::vect
 }
 
 TEST(BvhCollapse, EveryTriangleReachableOnceAndBoxesEnclose) {
-  const Scene s = make_triangle_soup(3000, 41);
+  const test::NamedMesh s = test::soup(3000, 41);
   for (const char* b : {"binned", "lbvh", "reinsert"}) {
     const BinaryBvh tree = build_with(b, s.mesh);
     for (int width : {2, 4, 8}) {
@@ -400,7 +379,7 @@ TEST(BvhCollapse, EveryTriangleReachableOnceAndBoxesEnclose) {
 }
 
 TEST(BvhCollapse, WideLayoutNodesAndBlocks) {
-  const Scene s = make_triangle_soup(2000, 43);
+  const test::NamedMesh s = test::soup(2000, 43);
   const BinaryBvh tree = build_with("binned", s.mesh);
   CollapseOptions o;
   o.width = 8;
@@ -438,7 +417,7 @@ TEST(BvhCollapse, WideLayoutNodesAndBlocks) {
 
 TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   // Long thin triangles across a box: the case spatial splits exist for.
-  const Scene s = make_triangle_soup(300, 47, 3.0f);
+  const test::NamedMesh s = test::soup(300, 47, 3.0f);
   const Prims p = prims_of(s.mesh);
   SbvhOptions so;
   so.alpha = 0.0f;
@@ -476,7 +455,7 @@ TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
 }
 
 TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {
-  const Scene s = make_triangle_soup(200, 53, 2.0f);
+  const test::NamedMesh s = test::soup(200, 53, 2.0f);
   const TriangleSplitter split(s.mesh);
   Pcg32 rng(11, 3);
   size_t crossings = 0;
@@ -561,8 +540,7 @@ TEST(BvhLbvh, MortonSpreadPlacesBitsEveryThird) {
 }
 
 TEST(BvhReinsertion, LowersSahCostAndRespectsTheTimeBudget) {
-  Scene s = make_triangle_soup(1, 1);
-  s.mesh = make_uv_sphere(96, 48);  // a surface: LBVH leaves room to improve
+  const test::NamedMesh s{"sphere", make_uv_sphere(96, 48)};  // a surface: LBVH leaves room to improve
   const Prims p = prims_of(s.mesh);
   const BinaryBvh base = build_lbvh(p.boxes, p.centroids);
   ReinsertionStats st;
@@ -749,6 +727,61 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
     EXPECT_TRUE(a->intersect1(Ray(Vec3f(4, 2, -1), Vec3f(0, 0, 1))).valid()) << spec << " on the box face";
     EXPECT_TRUE(a->intersect1(Ray(Vec3f(0, 0, -1), Vec3f(-0.0f, 0.0f, 1))).valid()) << spec << " corner, -0 dir";
   }
+}
+
+TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
+  // Coherent camera rays (pixel order, a partial last packet) with invalid,
+  // axis-parallel, tmin < 0 and short rays mixed in, through bvh:packet=16
+  // and the single-ray kernel: every field equal, and occlusion agrees. Coincident copies of a triangle
+  // make exact ties, which both must give to the lowest primitive id.
+  for (const Reference& ref : references()) {
+    test::NamedMesh s = ref.scene;
+    const size_t n = s.mesh.triangles.size();
+    for (size_t i = 0; i < std::min<size_t>(n, 200); ++i) s.mesh.triangles.push_back(s.mesh.triangles[i]);
+    std::vector<Ray> rays = test::camera_rays(s.mesh, 47, 40);
+    for (size_t i = 5; i < rays.size(); i += 97) rays[i].dir = Vec3f(0, 0, 0);   // invalid
+    for (size_t i = 9; i < rays.size(); i += 89) rays[i].dir.x() = 0.0f;          // axis-parallel component
+    for (size_t i = 13; i < rays.size(); i += 83) rays[i].tmin = -1.0f;           // tmin < 0
+    for (size_t i = 21; i < rays.size(); i += 79) rays[i].tmax = 0.5f;            // short
+    const std::pair<const char*, const char*> pairs[] = {
+        {"bvh", "bvh:packet=16"},
+        {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},
+        {"bvh:block=16", "bvh:packet=16,block=16"}};
+    for (const auto& [single_spec, spec] : pairs) {
+      auto single = make_accelerator(single_spec);
+      auto packet = make_accelerator(spec);
+      auto brute = make_accelerator("brute");
+      single->build(s.mesh);
+      packet->build(s.mesh);
+      brute->build(s.mesh);
+      std::vector<Hit> a(rays.size()), b(rays.size()), c(rays.size());
+      single->intersect(rays, a);
+      packet->intersect(rays, b);
+      brute->intersect(rays, c);
+      size_t hits = 0, bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        hits += a[i].valid();
+        const bool same = a[i].prim == b[i].prim && std::memcmp(&a[i], &b[i], sizeof(Hit)) == 0;
+        if (!same && bad++ < 3)
+          ADD_FAILURE() << spec << " " << s.name << " ray " << i << ": packet prim " << b[i].prim << " t " << b[i].t
+                        << ", single prim " << a[i].prim << " t " << a[i].t;
+        EXPECT_EQ(a[i].prim, c[i].prim) << spec << " " << s.name << " ray " << i << " vs brute force";
+      }
+      EXPECT_EQ(bad, 0u) << spec << " on " << s.name;
+      EXPECT_GT(hits, rays.size() / 10) << s.name;
+      // Occlusion through packets: occluded exactly when the closest hit exists.
+      std::vector<uint8_t> occ(rays.size());
+      packet->occluded(rays, occ);
+      size_t occ_bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i) occ_bad += (occ[i] != 0) != a[i].valid();
+      EXPECT_EQ(occ_bad, 0u) << spec << " occlusion on " << s.name;
+    }
+  }
+}
+
+TEST(BvhPacket, RejectsBadParameters) {
+  EXPECT_THROW(make_accelerator("bvh:packet=8"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:packet=16,layout=bvh4"), SpecError);
 }
 
 }  // namespace

@@ -172,5 +172,30 @@ TEST(Cli, OutputInUnwritablePlaceFailsCleanly) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
 }
 
+// `raylab verify` on the structures: a bad parameter is a usage error naming
+// it (exit 2); good specs report no wrong hit.
+TEST(Cli, VerifyRejectsBadStructureParameters) {
+  for (const auto& [spec, word] : {std::pair{"grid:density=0", "density"}, std::pair{"kdtree:ct=-1", "ct"}}) {
+    const auto r = test::run_raylab(std::string("verify --scene cornell --accel ") + spec + " --rays 10");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr(word));
+  }
+}
+
+TEST(Cli, VerifyReportsNoWrongHitsForKdTrees) {
+  const auto r = test::run_raylab("verify --scene copies:n=1000 --accel kdtree,kdtree:builder=median,kdtree:clip=0 --rays 4096");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("kdtree:builder=median"));
+}
+
+TEST(Cli, VerifyPassesForGridsOnDragonInSponza) {
+  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
+  const auto r = test::run_raylab("verify --scene " + test::shared_dir() +
+                                  "/scenes/dragon_in_sponza.ply --accel grid,hashgrid,grid2 --rays 20000 --threads 2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace raylab

@@ -456,6 +456,39 @@ TEST(CliCamera, GltfCameraIsHonoured) {
   EXPECT_FALSE(load_mesh_file(plain).view.from.isApprox(Vec3f(4, 0.5f, 0), 1e-2f));
 }
 
+TEST(CliCamera, ColladaCameraKeepsItsVerticalFieldOfView) {
+  // Assimp stores Collada's camera as the full horizontal angle (54.4 degrees
+  // for yfov 37.8 at aspect 1.5): read as a half angle it became 86 degrees and
+  // the model a speck (assimp-testmodels' duck.dae).
+  const auto dir = test::temp_dir("cam_dae");
+  const std::string dae = R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit meter="1" name="meter"/><up_axis>Y_UP</up_axis></asset>
+  <library_cameras><camera id="cam" name="cam"><optics><technique_common><perspective>
+    <yfov>37.8492</yfov><aspect_ratio>1.5</aspect_ratio><znear>0.1</znear><zfar>100</zfar>
+  </perspective></technique_common></optics></camera></library_cameras>
+  <library_geometries><geometry id="tri" name="tri"><mesh>
+    <source id="pos"><float_array id="pos-a" count="9">-1 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#pos-a" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="verts"><input semantic="POSITION" source="#pos"/></vertices>
+    <triangles count="1"><input semantic="VERTEX" source="#verts" offset="0"/><p>0 1 2</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="scene" name="scene">
+    <node id="camnode" name="camnode"><translate>0 0.5 5</translate><instance_camera url="#cam"/></node>
+    <node id="trinode" name="trinode"><instance_geometry url="#tri"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)";
+  const Scene s = load_mesh_file(test::write_file(dir, "cam.dae", dae));
+  EXPECT_NEAR(s.view.fov_deg, 37.8492, 0.05);
+  EXPECT_TRUE(s.view.from.isApprox(Vec3f(0, 0.5f, 5), 1e-4f)) << s.view.from.transpose();
+  const Vec3f dir_seen = (s.view.at - s.view.from).normalized();
+  EXPECT_TRUE(dir_seen.isApprox(Vec3f(0, 0, -1), 1e-4f)) << dir_seen.transpose();
+}
+
 }  // namespace
 }  // namespace raylab
 

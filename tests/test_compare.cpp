@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -38,17 +39,21 @@ TEST(MannWhitney, MatchesScipy) {
 
 // A bench report with one cell per accelerator; trace times around `seconds`
 // with +-2 % noise.
-nlohmann::json synthetic_report(const std::map<std::string, double>& seconds, uint64_t seed, int repeats = 7) {
+// `machine` scales every time, Embree's too: a machine-wide slow-down between runs.
+nlohmann::json synthetic_report(const std::map<std::string, double>& seconds, uint64_t seed, int repeats = 7,
+                                double machine = 1.0) {
   Pcg32 rng(seed, 7);
   nlohmann::json recs = nlohmann::json::array();
   for (const auto& [accel, s] : seconds) {
     std::vector<double> t;
-    for (int i = 0; i < repeats; ++i) t.push_back(s * (1.0 + 0.04 * (rng.uniform() - 0.5)));
+    for (int i = 0; i < repeats; ++i) t.push_back(machine * s * (1.0 + 0.04 * (rng.uniform() - 0.5)));
     std::vector<double> sorted = t;
     std::sort(sorted.begin(), sorted.end());
     const double median = sorted[sorted.size() / 2];
+    const double embree_s = machine * 0.008 * (1.0 + 0.01 * (rng.uniform() - 0.5));
     recs.push_back({{"scene", "soup:n=1000"}, {"accel", accel}, {"ray_set", "primary"}, {"threads", 1},
                     {"rays", 100000}, {"mrays_per_s", 0.1 / median}, {"build_ms", 10.0}, {"bytes", 1000},
+                    {"embree_mrays_per_s", 0.1 / embree_s}, {"ratio_to_embree", embree_s / median},
                     {"trace_s", t}});
   }
   return {{"schema_version", 2}, {"command", "bench"}, {"records", recs}};
@@ -91,6 +96,32 @@ TEST(Compare, SameDistributionIsNotFlaggedASlowedStructureIs) {
     }
     EXPECT_FALSE(c["regression"].get<bool>());
   }
+}
+
+TEST(Compare, MachineWideDriftIsCancelledByTheSameCellEmbreeTime) {
+  // Run B on a machine 12 % slower throughout (Embree too): by default nothing
+  // is significant, because each repeat is divided by its cell's Embree time;
+  // --raw sees the drift as a slow-down of every structure.
+  const auto dir = test::temp_dir("compare_drift");
+  const auto a = write(dir, "a.json", synthetic_report({{"bvh", 0.010}, {"kdtree", 0.020}}, 1));
+  const auto b = write(dir, "b.json", synthetic_report({{"bvh", 0.010}, {"kdtree", 0.020}}, 2, 7, 1.12));
+  const auto normalized = test::run_raylab("compare " + a + " " + b + " --fail-above 5 --json -");
+  ASSERT_EQ(normalized.exit_code, 0) << normalized.output;
+  const auto j = nlohmann::json::parse(normalized.output);
+  EXPECT_TRUE(j["normalize_by_embree"].get<bool>());
+  for (const auto& c : j["cells"]) {
+    EXPECT_TRUE(c["normalized_by_embree"].get<bool>()) << c.dump();
+    EXPECT_FALSE(c["significant"].get<bool>()) << c.dump();
+    EXPECT_LT(std::abs(c["speed_change_pct"].get<double>()), 4.0) << c.dump();
+  }
+  const auto raw = test::run_raylab("compare " + a + " " + b + " --fail-above 5 --raw");
+  EXPECT_EQ(raw.exit_code, 1) << raw.output;
+  EXPECT_THAT(raw.output, HasSubstr("2 regressions "));
+  // A real slow-down of one structure still shows through the normalisation.
+  const auto slow = write(dir, "slow.json", synthetic_report({{"bvh", 0.010}, {"kdtree", 0.026}}, 3, 7, 1.12));
+  const auto r = test::run_raylab("compare " + a + " " + slow + " --fail-above 5");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("1 regression "));
 }
 
 TEST(Compare, CellsMatchOnSceneAccelRaySetAndThreads) {

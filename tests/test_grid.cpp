@@ -1,7 +1,8 @@
 // Grids (issue 3): the resolution rule, the triangle/box overlap test, cell
 // assignment, the 3D-DDA's corner cases, and grid / hashgrid / grid2 against
-// the brute-force reference and Embree on Cornell, soups, a flat scene, a
-// teapot in a stadium and the shared meshes; memory budget and bad specs.
+// the brute-force reference on Cornell, soups, a flat scene and a teapot in a
+// stadium; memory budget and bad specs (agreement with Embree:
+// tests/test_structures_verify.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,9 +19,7 @@
 #include "accel/grid/two_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 #include "accel/registry.h"
-#include "checks/verify.h"
-#include "scenes/procedural.h"
-#include "scenes/scene_registry.h"
+#include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -28,151 +27,37 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// ---------------------------------------------------------------------------
-// Scenes built here
-
-Scene lit_scene_from_mesh(std::string name, TriangleMesh mesh) {
-  Scene s = scene_from_mesh(std::move(name), std::move(mesh));
-  s.view = frame_bounds(s.mesh.bounds());
-  s.background = Vec3f::Constant(1.0f);
-  return s;
-}
-
-void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-  const auto base = static_cast<uint32_t>(m.vertices.size());
-  m.vertices.insert(m.vertices.end(), {a, b, c});
-  m.triangles.push_back({base, base + 1, base + 2});
-}
-
-// All triangles in the plane z = 0.5: a tessellated square plus random
-// small triangles lying in the same plane (overlapping ones included).
-TriangleMesh make_flat_scene(int tiles, size_t extra, uint64_t seed) {
-  TriangleMesh m;
-  const float z = 0.5f;
-  for (int i = 0; i < tiles; ++i)
-    for (int j = 0; j < tiles; ++j) {
-      const float x0 = static_cast<float>(i) / tiles, x1 = static_cast<float>(i + 1) / tiles;
-      const float y0 = static_cast<float>(j) / tiles, y1 = static_cast<float>(j + 1) / tiles;
-      add_triangle(m, {x0, y0, z}, {x1, y0, z}, {x1, y1, z});
-      add_triangle(m, {x0, y0, z}, {x1, y1, z}, {x0, y1, z});
-    }
-  Pcg32 rng(seed, 5);
-  for (size_t i = 0; i < extra; ++i) {
-    const Vec3f c(rng.uniform(), rng.uniform(), z);
-    add_triangle(m, c, c + Vec3f(0.05f * rng.uniform(), 0.01f, 0), c + Vec3f(0.01f, 0.05f * rng.uniform(), 0));
-  }
-  return m;
-}
-
-// "Teapot in a stadium": a closed room 1000 units wide (floor tessellated,
-// walls and ceiling as big triangles) around a dense sphere of diameter 1
-// (about 8,000 triangles), 1000x smaller than the room, resting on a huge
-// table top that crosses its cell.
-TriangleMesh make_stadium_scene() {
-  TriangleMesh m;
-  const float h = 500.0f;
-  const Vec3f c[8] = {{-h, -h, -h}, {h, -h, -h}, {h, h, -h}, {-h, h, -h},
-                      {-h, -h, h},  {h, -h, h},  {h, h, h},  {-h, h, h}};
-  auto quad = [&](int a, int b, int cc, int d) {
-    add_triangle(m, c[a], c[b], c[cc]);
-    add_triangle(m, c[a], c[cc], c[d]);
-  };
-  quad(0, 1, 5, 4);  // y = -h
-  quad(3, 7, 6, 2);  // y = +h
-  quad(0, 4, 7, 3);  // x = -h
-  quad(1, 2, 6, 5);  // x = +h
-  quad(4, 5, 6, 7);  // z = +h
-  // Floor z = -h as a 20x20 tiling.
-  const int n = 20;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const float x0 = -h + 2 * h * i / n, x1 = -h + 2 * h * (i + 1) / n;
-      const float y0 = -h + 2 * h * j / n, y1 = -h + 2 * h * (j + 1) / n;
-      add_triangle(m, {x0, y0, -h}, {x1, y1, -h}, {x1, y0, -h});
-      add_triangle(m, {x0, y0, -h}, {x0, y1, -h}, {x1, y1, -h});
-    }
-  add_triangle(m, {-300, -300, 0.99f}, {300, -300, 0.99f}, {0, 300, 0.99f});
-  m.append(make_uv_sphere(90, 45, Vec3f(3.0f, -2.0f, 1.5f), 0.5f));
-  return m;
-}
-
-const Vec3f kStadiumObject(3.0f, -2.0f, 1.5f);
+using test::kStadiumObject;
 
 // ---------------------------------------------------------------------------
 // Comparing an accelerator with the brute-force reference (same watertight
-// test, so answers must agree up to exact ties).
+// test, so answers must agree up to ties within 1e-6 of the distance).
+
+using test::flat_tiles_mesh;
+using test::mesh_test_rays;
+using test::teapot_in_stadium_mesh;
 
 struct Mismatches {
   size_t closest = 0, occlusion = 0, rays = 0;
 };
 
-std::vector<Hit> brute_hits(const TriangleMesh& mesh, const std::vector<Ray>& rays) {
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  std::vector<Hit> hits(rays.size());
-  brute->intersect(rays, hits);
-  return hits;
-}
-
 Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays,
-                              const std::vector<Hit>& b) {
+                              const test::BruteReference& ref) {
   auto accel = make_accelerator(spec);
   accel->build(mesh);
-  std::vector<Hit> a(rays.size());
-  std::vector<uint8_t> occ(rays.size());
-  accel->intersect(rays, a);
-  accel->occluded(rays, occ);
-  Mismatches m;
-  m.rays = rays.size();
-  for (size_t i = 0; i < rays.size(); ++i) {
-    const bool same = a[i].valid() == b[i].valid() &&
-                      (!a[i].valid() || a[i].prim == b[i].prim || std::fabs(a[i].t - b[i].t) <= 1e-6f * b[i].t);
-    if (!same) {
-      if (m.closest < 5)
-        ADD_FAILURE() << spec << " ray " << i << " org " << rays[i].org.transpose() << " dir "
-                      << rays[i].dir.transpose() << " [" << rays[i].tmin << ", " << rays[i].tmax << "]: got prim "
-                      << a[i].prim << " t " << a[i].t << ", brute prim " << b[i].prim << " t " << b[i].t;
-      ++m.closest;
-    }
-    if (static_cast<bool>(occ[i]) != b[i].valid()) ++m.occlusion;
-  }
-  return m;
+  const test::Disagreement d = test::compare_with_brute(*accel, ref, rays, spec, 1e-6f);
+  return {d.closest, d.occlusion, rays.size()};
 }
 
 Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays) {
-  return compare_with_brute(mesh, spec, rays, brute_hits(mesh, rays));
-}
-
-// Random rays: half from random points in the (enlarged) bounds in random
-// directions, half aimed at random triangles' interiors, edges and vertices.
-std::vector<Ray> make_test_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
-  Pcg32 rng(seed, 11);
-  const Aabb b = mesh.bounds();
-  const Vec3f d = b.diagonal();
-  std::vector<Ray> rays;
-  for (size_t i = 0; i < count; ++i) {
-    const Vec3f org = b.lo - 0.1f * d + Vec3f(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(1.2f * d);
-    if (i % 2 == 0 || mesh.num_triangles() == 0) {
-      rays.emplace_back(org, test::random_direction(rng));
-    } else {
-      const size_t t = rng.next() % mesh.num_triangles();
-      float u = rng.uniform(), v = rng.uniform();
-      if (u + v > 1) u = 1 - u, v = 1 - v;
-      if (i % 6 == 1) v = 0;          // on an edge
-      if (i % 12 == 3) u = v = 0;     // on a vertex
-      const Vec3f target = (1 - u - v) * mesh.vertex(t, 0) + u * mesh.vertex(t, 1) + v * mesh.vertex(t, 2);
-      const Vec3f dir = target - org;
-      if (dir.squaredNorm() > 0) rays.emplace_back(org, dir.normalized());
-    }
-  }
-  return rays;
+  return compare_with_brute(mesh, spec, rays, test::brute_reference(mesh, rays));
 }
 
 const std::vector<std::string> kGridSpecs = {"grid", "hashgrid", "grid2", "grid:assign=bbox", "hashgrid:density=4",
                                              "grid2:top=1,density=2", "grid:res=7x3x5"};
 
 void expect_all_agree(const TriangleMesh& mesh, const std::vector<Ray>& rays, const std::string& what) {
-  const std::vector<Hit> reference = brute_hits(mesh, rays);
+  const test::BruteReference reference = test::brute_reference(mesh, rays);
   for (const auto& spec : kGridSpecs) {
     const Mismatches m = compare_with_brute(mesh, spec, rays, reference);
     EXPECT_EQ(m.closest, 0u) << spec << " on " << what << " (" << m.rays << " rays)";
@@ -510,20 +395,20 @@ TEST(Dda, RandomRaysVisitEveryCellTheyCross) {
 // Accelerators against brute force
 
 TEST(GridAccel, CornellBoxAgreesWithBrute) {
-  const Scene s = load_scene("cornell");
-  expect_all_agree(s.mesh, make_test_rays(s.mesh, 4000, 1), "cornell");
+  const test::NamedMesh s{"cornell", cornell_box_mesh()};
+  expect_all_agree(s.mesh, mesh_test_rays(s.mesh, 4000, 1), "cornell");
 }
 
 TEST(GridAccel, RandomSoupsAgreeWithBrute) {
   for (const auto& [n, size, seed] : {std::tuple{2000, 1.0f, 1}, std::tuple{5000, 4.0f, 2}, std::tuple{300, 20.0f, 3}}) {
-    const Scene s = make_triangle_soup(n, seed, size);
-    expect_all_agree(s.mesh, make_test_rays(s.mesh, 3000, seed), s.name);
+    const test::NamedMesh s = test::soup(n, seed, size);
+    expect_all_agree(s.mesh, mesh_test_rays(s.mesh, 3000, seed), s.name);
   }
 }
 
 TEST(GridAccel, AxisAlignedFlatSceneAgreesWithBrute) {
-  const TriangleMesh m = make_flat_scene(16, 400, 4);
-  std::vector<Ray> rays = make_test_rays(m, 3000, 5);
+  const TriangleMesh m = flat_tiles_mesh(16, 400, 4);
+  std::vector<Ray> rays = mesh_test_rays(m, 3000, 5);
   // Rays parallel to the plane, in it, and through it along +-z exactly.
   Pcg32 rng(6, 2);
   for (int i = 0; i < 500; ++i) {
@@ -543,8 +428,8 @@ TEST(GridAccel, AxisAlignedFlatSceneAgreesWithBrute) {
 }
 
 TEST(GridAccel, TeapotInAStadiumAgreesWithBrute) {
-  const TriangleMesh m = make_stadium_scene();
-  std::vector<Ray> rays = make_test_rays(m, 2000, 7);
+  const TriangleMesh m = teapot_in_stadium_mesh();
+  std::vector<Ray> rays = mesh_test_rays(m, 2000, 7);
   // Rays from around the room aimed at the small dense object.
   Pcg32 rng(8, 4);
   for (int i = 0; i < 2000; ++i) {
@@ -552,7 +437,7 @@ TEST(GridAccel, TeapotInAStadiumAgreesWithBrute) {
     const Vec3f target = kStadiumObject + 0.6f * test::random_direction(rng);
     rays.emplace_back(org, (target - org).normalized());
   }
-  const std::vector<Hit> reference = brute_hits(m, rays);
+  const test::BruteReference reference = test::brute_reference(m, rays);
   for (const auto& spec : {"grid", "hashgrid", "grid2", "grid2:top=0.01"}) {
     const Mismatches mm = compare_with_brute(m, spec, rays, reference);
     EXPECT_EQ(mm.closest, 0u) << spec;
@@ -563,7 +448,7 @@ TEST(GridAccel, TeapotInAStadiumAgreesWithBrute) {
 TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
   // Counted work, not time: rays aimed at the dense object test far fewer
   // triangles in grid2, whose sub-grid adapts to the object.
-  const TriangleMesh m = make_stadium_scene();
+  const TriangleMesh m = teapot_in_stadium_mesh();
   std::vector<Ray> rays;
   Pcg32 rng(9, 4);
   for (int i = 0; i < 2000; ++i) {
@@ -640,9 +525,9 @@ TEST(GridAccel, HitFarAlongASpanningTriangleWaitsForNearerCells) {
   // its hit at x = 9 is found in the first cell and must not be accepted
   // there: the small triangle S at x = 5 is nearer.
   TriangleMesh m;
-  add_triangle(m, {0, 0, 0.59f}, {0, 1, 0.59f}, {10, 0.5f, 0.49f});  // T, id 0
-  add_triangle(m, {5, 0.3f, 0.3f}, {5, 0.7f, 0.3f}, {5, 0.5f, 0.7f});  // S, id 1
-  add_triangle(m, {0, 0, 0}, {10, 0, 0}, {10, 1, 1});                 // grows the box, id 2
+  append_triangle(m, {0, 0, 0.59f}, {0, 1, 0.59f}, {10, 0.5f, 0.49f});  // T, id 0
+  append_triangle(m, {5, 0.3f, 0.3f}, {5, 0.7f, 0.3f}, {5, 0.5f, 0.7f});  // S, id 1
+  append_triangle(m, {0, 0, 0}, {10, 0, 0}, {10, 1, 1});                 // grows the box, id 2
   const Ray r(Vec3f(-0.5f, 0.5f, 0.5f), Vec3f(1, 0, 0));
   for (const auto& spec : {"grid:res=10x1x1", "hashgrid:res=10x1x1", "grid2:top=1,density=1", "grid", "grid:res=40x3x3"}) {
     auto a = make_accelerator(spec);
@@ -667,7 +552,7 @@ TEST(GridAccel, TminTmaxWindowsAndStartingInside) {
   TriangleMesh m;
   for (int i = 0; i < 5; ++i) {
     const float x = 1.0f + i;
-    add_triangle(m, {x, -1, -1}, {x, 3, -1}, {x, -1, 3});  // planes x = 1..5 covering y,z in [0,1]
+    append_triangle(m, {x, -1, -1}, {x, 3, -1}, {x, -1, 3});  // planes x = 1..5 covering y,z in [0,1]
   }
   for (const auto& spec : {"grid", "hashgrid", "grid2", "grid:res=3x2x2"}) {
     auto a = make_accelerator(spec);
@@ -697,7 +582,7 @@ TEST(GridAccel, TminTmaxWindowsAndStartingInside) {
 TEST(GridAccel, OriginsOnCellBoundariesAndRaysAlongThem) {
   // Origins placed exactly on the grid's cell boundaries (as floats), rays
   // along and across them, compared with brute force.
-  const Scene s = make_triangle_soup(3000, 11, 2.0f);
+  const test::NamedMesh s = test::soup(3000, 11, 2.0f);
   GridOptions opt;
   opt.res = GridRes{8, 8, 8};
   BuildStats st;
@@ -713,7 +598,7 @@ TEST(GridAccel, OriginsOnCellBoundariesAndRaysAlongThem) {
     if (i % 7 == 0) dir = Vec3f::Unit(i % 3) * ((i % 2) ? 1.0f : -1.0f);
     rays.emplace_back(org, dir);
   }
-  const std::vector<Hit> reference = brute_hits(s.mesh, rays);
+  const test::BruteReference reference = test::brute_reference(s.mesh, rays);
   for (const auto& spec : {"grid:res=8x8x8", "hashgrid:res=8x8x8", "grid", "grid2"}) {
     const Mismatches m = compare_with_brute(s.mesh, spec, rays, reference);
     EXPECT_EQ(m.closest, 0u) << spec;
@@ -726,9 +611,9 @@ TEST(GridAccel, DegenerateInputs) {
   TriangleMesh empty;
   // 1000 copies of one triangle, and degenerate (zero-area) triangles.
   TriangleMesh copies;
-  for (int i = 0; i < 1000; ++i) add_triangle(copies, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});
-  add_triangle(copies, {0, 0, 1}, {1, 1, 1}, {2, 2, 1});  // collinear
-  add_triangle(copies, {3, 3, 3}, {3, 3, 3}, {3, 3, 3});  // a point
+  for (int i = 0; i < 1000; ++i) append_triangle(copies, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  append_triangle(copies, {0, 0, 1}, {1, 1, 1}, {2, 2, 1});  // collinear
+  append_triangle(copies, {3, 3, 3}, {3, 3, 3}, {3, 3, 3});  // a point
   for (const auto& spec : {"grid", "hashgrid", "grid2", "grid:assign=bbox"}) {
     auto a = make_accelerator(spec);
     a->build(empty);
@@ -742,14 +627,14 @@ TEST(GridAccel, DegenerateInputs) {
     EXPECT_FLOAT_EQ(h.t, 5.0f);
     EXPECT_LT(h.prim, 1000u);
   }
-  expect_all_agree(copies, make_test_rays(copies, 500, 13), "copies");
+  expect_all_agree(copies, mesh_test_rays(copies, 500, 13), "copies");
 }
 
 // ---------------------------------------------------------------------------
 // Statistics, memory, budget, parameters
 
 TEST(GridStats, BuildAndTraversalFiguresAreConsistent) {
-  const Scene s = make_triangle_soup(4000, 3, 1.0f);
+  const test::NamedMesh s = test::soup(4000, 3, 1.0f);
   for (const auto& spec : {"grid", "hashgrid", "grid2"}) {
     auto a = make_accelerator(spec);
     const BuildStats st = a->build(s.mesh);
@@ -763,7 +648,7 @@ TEST(GridStats, BuildAndTraversalFiguresAreConsistent) {
     EXPECT_GE(st.extra.at("empty_fraction"), 0.0);
     EXPECT_LT(st.extra.at("empty_fraction"), 1.0);
     EXPECT_GE(st.extra.at("max_tris_per_cell"), st.extra.at("mean_tris_per_nonempty_cell"));
-    const std::vector<Ray> rays = make_test_rays(s.mesh, 1000, 2);
+    const std::vector<Ray> rays = mesh_test_rays(s.mesh, 1000, 2);
     std::vector<Hit> hits(rays.size());
     TraversalStats ts;
     a->intersect(rays, hits, &ts);
@@ -790,7 +675,7 @@ TEST(GridStats, BuildAndTraversalFiguresAreConsistent) {
 
 TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution) {
   // Teapot in a stadium: at high density almost every dense cell is empty.
-  const TriangleMesh m = make_stadium_scene();
+  const TriangleMesh m = teapot_in_stadium_mesh();
   struct Figures {
     double bytes, cells, occupied, refs;
   };
@@ -823,7 +708,7 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
 }
 
 TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
-  const Scene s = make_triangle_soup(20000, 5, 1.0f);
+  const test::NamedMesh s = test::soup(20000, 5, 1.0f);
   for (const auto& spec : {"grid:density=64,budget=0.5", "hashgrid:density=64,budget=0.5",
                            "grid2:density=64,budget=0.5", "grid:res=1000x1000x1000,budget=1"}) {
     auto a = make_accelerator(spec);
@@ -841,7 +726,7 @@ TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
       EXPECT_LT(st.extra.at("lambda"), 64.0) << spec;
     }
     // Still correct.
-    const Mismatches m = compare_with_brute(s.mesh, spec, make_test_rays(s.mesh, 300, 3));
+    const Mismatches m = compare_with_brute(s.mesh, spec, mesh_test_rays(s.mesh, 300, 3));
     EXPECT_EQ(m.closest, 0u) << spec;
   }
   // Within the budget: no warning.
@@ -869,46 +754,6 @@ TEST(GridParams, BadParametersAreRejected) {
   }
   EXPECT_NO_THROW(make_accelerator("grid:density=0.125,res=4x4x4,budget=16,assign=bbox,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("grid2:top=0.5,density=2"));
-  const auto r = test::run_raylab("verify --scene cornell --accel grid:density=0 --rays 10");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("density"), std::string::npos) << r.output;
-}
-
-// ---------------------------------------------------------------------------
-// Against Embree (raylab verify) on procedural and shared scenes
-
-void expect_verified(const Scene& scene, size_t rays) {
-  VerifyOptions vo;
-  vo.rays = rays;
-  vo.threads = 2;
-  const auto records = verify_accelerators(scene, {"grid", "hashgrid", "grid2"}, vo);
-  ASSERT_EQ(records.size(), 6u);
-  for (const auto& r : records) {
-    EXPECT_EQ(r.raylab_wrong, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
-    EXPECT_EQ(r.occlusion_disagree, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
-  }
-}
-
-TEST(GridVerify, ProceduralScenesAgreeWithEmbree) {
-  expect_verified(load_scene("cornell"), 20000);
-  expect_verified(load_scene("soup:n=20000,seed=4"), 20000);
-  expect_verified(lit_scene_from_mesh("flat", make_flat_scene(40, 1000, 2)), 20000);
-  expect_verified(lit_scene_from_mesh("stadium", make_stadium_scene()), 20000);
-}
-
-TEST(GridVerify, SharedMeshesAgreeWithEmbree) {
-  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
-  for (const char* mesh : {"bunny.ply", "sponza.ply", "teapot.ply"}) {
-    expect_verified(load_scene(test::shared_dir() + "/scenes/" + mesh), 20000);
-  }
-}
-
-TEST(GridVerify, CommandLineVerifyPassesOnDragonInSponza) {
-  if (!test::have_shared_scenes()) GTEST_SKIP() << "../shared/scenes not present";
-  const auto r = test::run_raylab("verify --scene " + test::shared_dir() +
-                                  "/scenes/dragon_in_sponza.ply --accel grid,hashgrid,grid2 --rays 20000 --threads 2");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 // k-d tree (accel/kdtree): exact agreement with brute force (the same
 // watertight kernel on the same triangles, so a missed cell shows up as a
 // different distance), traversal corner cases at split planes, builder
-// invariants, termination on degenerate inputs, statistics, parameters, and
-// agreement with Embree (through the double-precision oracle of `verify`).
+// invariants, termination on degenerate inputs, statistics and parameters
+// (agreement with Embree: tests/test_structures_verify.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,9 +15,7 @@
 #include "accel/kdtree/build_spatial_median.h"
 #include "accel/kdtree/clip_triangle.h"
 #include "accel/registry.h"
-#include "checks/verify.h"
-#include "scenes/procedural.h"
-#include "scenes/scene_registry.h"
+#include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -54,19 +52,9 @@ std::string describe(const Ray& r) {
 
 // Brute-force answers for a set of rays, computed once and compared with
 // every k-d tree variant.
-struct Reference {
-  std::vector<Hit> hits;
-  std::vector<uint8_t> occluded;
-};
+using Reference = test::BruteReference;
 
-Reference brute_force(const TriangleMesh& mesh, std::span<const Ray> rays) {
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  Reference ref{std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size())};
-  brute->intersect(rays, ref.hits);
-  brute->occluded(rays, ref.occluded);
-  return ref;
-}
+Reference brute_force(const TriangleMesh& mesh, std::span<const Ray> rays) { return test::brute_reference(mesh, rays); }
 
 // Closest hit, occlusion and the instrumented kernel must agree with brute
 // force exactly: the same hit or miss, the same distance bit for bit, and the
@@ -161,7 +149,7 @@ KdTree build_tree(const std::string& kind, const TriangleMesh& mesh, const KdBui
 }
 
 // Scenes shared by several tests.
-TriangleMesh cornell() { return make_cornell_box().mesh; }
+TriangleMesh cornell() { return cornell_box_mesh(); }
 
 // Large triangles in 8 parallel planes x = k/8, heavily overlapping within
 // each plane, plus a few small triangles.
@@ -191,7 +179,7 @@ TEST(KdTree, MatchesBruteForceOnCornellBox) {
 }
 
 TEST(KdTree, MollerTrumboreVariantMatchesBruteForceWithTheSameTest) {
-  const TriangleMesh mesh = make_triangle_soup(2000, 9).mesh;
+  const TriangleMesh mesh = triangle_soup_mesh(2000, 9);
   const Built kd = build("kdtree:tri=mt", mesh);
   auto brute = make_accelerator("brute:tri=mt");
   brute->build(mesh);
@@ -206,7 +194,7 @@ TEST(KdTree, MollerTrumboreVariantMatchesBruteForceWithTheSameTest) {
 
 TEST(KdTree, MatchesBruteForceOnRandomSoups) {
   for (const auto& [seed, size] : {std::pair{1u, 1.0f}, std::pair{2u, 5.0f}, std::pair{3u, 0.2f}}) {
-    const TriangleMesh mesh = make_triangle_soup(2000, seed, size).mesh;
+    const TriangleMesh mesh = triangle_soup_mesh(2000, seed, size);
     const auto rays = mixed_rays(mesh, 5000, seed + 10);
     const Reference ref = brute_force(mesh, rays);
     for (const char* spec : kKdSpecs) {
@@ -219,7 +207,7 @@ TEST(KdTree, MatchesBruteForceOnRandomSoups) {
 }
 
 TEST(KdTree, ThousandCopiesOfOneTriangle) {
-  TriangleMesh mesh = make_triangle_copies(1000).mesh;
+  TriangleMesh mesh = triangle_copies_mesh(1000);
   const auto rays = mixed_rays(mesh, 4000, 4);
   const Reference ref = brute_force(mesh, rays);
   for (const char* spec : kKdSpecs) {
@@ -232,7 +220,7 @@ TEST(KdTree, ThousandCopiesOfOneTriangle) {
     EXPECT_DOUBLE_EQ(kd.stats.extra.at("refs_per_triangle"), 1.0) << spec;
   }
   // Next to other geometry the copies are cut off into one leaf.
-  mesh.append(make_triangle_soup(1000, 5).mesh);
+  mesh.append(triangle_soup_mesh(1000, 5));
   const auto rays2 = mixed_rays(mesh, 4000, 6);
   const Reference ref2 = brute_force(mesh, rays2);
   for (const char* spec : kKdSpecs) {
@@ -248,7 +236,7 @@ TEST(KdTree, AllCoplanarAxisAlignedScene) {
   for (int axis = 0; axis < 3; ++axis) {
     // A 16 x 16 quad grid (shared edges at multiples of 1/16, exact in
     // float) and 3000 random overlapping triangles, all in coordinate 0.5.
-    const TriangleMesh mesh = make_coplanar_scene(1500, 16, axis, 7).mesh;
+    const TriangleMesh mesh = coplanar_mesh(1500, 16, axis, 7);
     std::vector<Ray> rays = mixed_rays(mesh, 3000, 8 + axis);
     Pcg32 rng(axis, 3);
     for (int i = 0; i < 2000; ++i) {
@@ -279,7 +267,7 @@ TEST(KdTree, AllCoplanarAxisAlignedScene) {
 TEST(KdTree, PlanarTrianglesInsideAVolumeGetTheirOwnFlatCells) {
   // Axis-aligned triangles in the plane x = 0.5 amid a soup: the SAH
   // builder must consider that plane (planar events) and splits there.
-  TriangleMesh mesh = make_triangle_soup(2000, 12).mesh;
+  TriangleMesh mesh = triangle_soup_mesh(2000, 12);
   Pcg32 rng(12, 1);
   for (int i = 0; i < 2000; ++i) {
     const float y = rng.uniform(), z = rng.uniform();
@@ -399,8 +387,8 @@ std::vector<Ray> split_plane_rays(const TriangleMesh& mesh, const KdTree& tree, 
 TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
   std::vector<std::pair<std::string, TriangleMesh>> scenes = {
       {"cornell", cornell()},
-      {"soup", make_triangle_soup(1500, 21).mesh},
-      {"coplanar", make_coplanar_scene(500, 8, 1, 22).mesh},
+      {"soup", triangle_soup_mesh(1500, 21)},
+      {"coplanar", coplanar_mesh(500, 8, 1, 22)},
       {"sphere", make_uv_sphere(32, 16, Vec3f(0.25f, 0.5f, -0.125f), 1.0f)}};
   for (const auto& [name, mesh] : scenes) {
     for (const std::string kind : {"sah", "median"}) {
@@ -451,7 +439,7 @@ TEST(KdTreeTraversal, SignedZeroDirectionsGiveTheSameAnswer) {
 }
 
 TEST(KdTreeTraversal, TminTmaxWindows) {
-  const TriangleMesh mesh = make_triangle_soup(2000, 31, 3.0f).mesh;
+  const TriangleMesh mesh = triangle_soup_mesh(2000, 31, 3.0f);
   auto brute = make_accelerator("brute");
   brute->build(mesh);
   const auto base = mixed_rays(mesh, 2000, 32);
@@ -543,7 +531,7 @@ TEST(KdTreeTraversal, InvalidRaysAndEmptyMeshMiss) {
 }
 
 TEST(KdTreeTraversal, ConcurrentQueriesGiveTheSameAnswers) {
-  const TriangleMesh mesh = make_triangle_soup(5000, 41).mesh;
+  const TriangleMesh mesh = triangle_soup_mesh(5000, 41);
   const Built kd = build("kdtree", mesh);
   const auto rays = mixed_rays(mesh, 20000, 42);
   std::vector<Hit> serial(rays.size()), parallel(rays.size());
@@ -566,7 +554,7 @@ TEST(KdTreeTraversal, ConcurrentQueriesGiveTheSameAnswers) {
 // part of it is inside.
 TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
   const std::vector<std::pair<std::string, TriangleMesh>> scenes = {
-      {"soup", make_triangle_soup(2000, 51, 4.0f).mesh},
+      {"soup", triangle_soup_mesh(2000, 51, 4.0f)},
       {"sphere far away", make_uv_sphere(24, 12, Vec3f(3e4f, 1e4f, -2e4f), 10.0f)},
       {"cornell", cornell()}};
   for (const auto& [name, mesh] : scenes) {
@@ -617,7 +605,7 @@ TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
 }
 
 TEST(KdTreeBuilder, TreeIsWellFormedAndDeterministic) {
-  const TriangleMesh mesh = make_triangle_soup(20000, 61).mesh;  // large enough for parallel tasks
+  const TriangleMesh mesh = triangle_soup_mesh(20000, 61);  // large enough for parallel tasks
   for (const std::string kind : {"sah", "median"}) {
     const KdTree a = build_tree(kind, mesh), b = build_tree(kind, mesh);
     ASSERT_EQ(a.nodes.size(), b.nodes.size()) << kind;
@@ -689,7 +677,7 @@ TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
     double max_refs_per_triangle;
   };
   std::vector<Case> cases;
-  cases.push_back({"50k copies", make_triangle_copies(50000).mesh, 1.0});
+  cases.push_back({"50k copies", triangle_copies_mesh(50000), 1.0});
   {
     TriangleMesh points;  // zero-area triangles, all at the same point
     for (int i = 0; i < 20000; ++i) add_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
@@ -703,11 +691,11 @@ TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
     }
     cases.push_back({"duplicated planar pair", planar, 1.0});
   }
-  cases.push_back({"20k overlapping coplanar", make_coplanar_scene(20000, 0, 2, 3).mesh, 16.0});
+  cases.push_back({"20k overlapping coplanar", coplanar_mesh(20000, 0, 2, 3), 16.0});
   cases.push_back({"overlapping triangles in 8 planes", overlapping_planes(4000, 4), 40.0});
   {
-    TriangleMesh mixed = make_triangle_copies(20000).mesh;
-    mixed.append(make_triangle_soup(20000, 5).mesh);
+    TriangleMesh mixed = triangle_copies_mesh(20000);
+    mixed.append(triangle_soup_mesh(20000, 5));
     cases.push_back({"copies next to a soup", mixed, 4.0});
   }
   for (const Case& c : cases) {
@@ -728,7 +716,7 @@ TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
 }
 
 TEST(KdTreeBuilder, MaxDepthParameterBoundsTheTree) {
-  const TriangleMesh mesh = make_triangle_soup(2000, 81).mesh;
+  const TriangleMesh mesh = triangle_soup_mesh(2000, 81);
   const auto rays = mixed_rays(mesh, 2000, 82);
   const Reference ref = brute_force(mesh, rays);
   for (int depth : {0, 1, 5, 12}) {
@@ -750,7 +738,7 @@ TEST(KdTreeBuilder, MaxDepthParameterBoundsTheTree) {
 // ---------------------------------------------------------------- statistics and parameters
 
 TEST(KdTreeStats, BuildAndTraversalFiguresAreReported) {
-  const TriangleMesh mesh = make_triangle_soup(10000, 91).mesh;
+  const TriangleMesh mesh = triangle_soup_mesh(10000, 91);
   const Built kd = build("kdtree", mesh);
   const BuildStats& s = kd.stats;
   EXPECT_GT(s.build_ms, 0.0);
@@ -806,47 +794,6 @@ TEST(KdTreeParams, BadParametersAreRejected) {
   }
   EXPECT_NO_THROW(make_accelerator("kdtree:builder=median,leaf=4,clip=0,max_depth=20"));
   EXPECT_NO_THROW(make_accelerator("kdtree:ct=1,ci=80,empty_bonus=0.5,max_depth=auto,tri=mt"));
-  const auto r = test::run_raylab("verify --scene cornell --accel kdtree:ct=-1");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("ct"), std::string::npos) << r.output;
-}
-
-// ---------------------------------------------------------------- agreement with Embree (verify)
-
-void expect_verify_clean(const Scene& scene, size_t rays) {
-  VerifyOptions vo;
-  vo.rays = rays;
-  const auto records = verify_accelerators(scene, {std::begin(kKdSpecs), std::end(kKdSpecs)}, vo);
-  ASSERT_EQ(records.size(), 3u * vo.ray_sets.size());
-  for (const VerifyRecord& r : records) {
-    EXPECT_EQ(r.raylab_wrong, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
-    EXPECT_EQ(r.occlusion_disagree, 0u) << scene.name << " " << r.accel << " " << r.ray_set;
-  }
-}
-
-TEST(KdTreeVerify, AgreesWithEmbreeOnProceduralScenes) {
-  expect_verify_clean(make_cornell_box(), 20000);
-  expect_verify_clean(make_triangle_soup(20000, 1), 20000);
-  expect_verify_clean(make_triangle_soup(5000, 2, 6.0f), 20000);
-  expect_verify_clean(make_triangle_copies(1000), 20000);
-  expect_verify_clean(make_coplanar_scene(1000, 16, 2, 1), 20000);
-  expect_verify_clean(make_coplanar_scene(1000, 16, 0, 2), 20000);
-}
-
-TEST(KdTreeVerify, CommandLineReportsNoWrongHits) {
-  const auto r = test::run_raylab("verify --scene copies:n=1000 --accel kdtree,kdtree:builder=median,kdtree:clip=0 --rays 4096");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(r.output.find("FAIL"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("kdtree:builder=median"), std::string::npos) << r.output;
-}
-
-TEST(KdTreeVerify, AgreesWithEmbreeOnSharedMeshes) {
-  if (!test::have_shared_scenes()) GTEST_SKIP() << "no ../shared/scenes";
-  for (const char* file : {"scenes/cornell_box.obj", "scenes/teapot.ply", "scenes/bunny.ply", "scenes/sponza.ply",
-                           "scenes/spd/tetra_s6.obj", "scenes/spd/gears_s4.obj"}) {
-    const Scene scene = load_scene(test::shared_dir() + "/" + file);
-    expect_verify_clean(scene, 8192);
-  }
 }
 
 }  // namespace

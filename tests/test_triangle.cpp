@@ -4,7 +4,7 @@
 
 #include "accel/core/intersect_triangle.h"
 #include "accel/registry.h"
-#include "scenes/procedural.h"
+#include "base/mesh_shapes.h"
 #include "tests/test_util.h"
 
 namespace raylab {

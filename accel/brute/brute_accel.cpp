@@ -23,10 +23,16 @@ class BruteAccel final : public BatchAccelerator<BruteAccel> {
     intersect_leaf(pre, ray, tris_.data(), static_cast<uint32_t>(tris_.size()), rec);
     return rec.hit();
   }
+  // One leaf holding every triangle: its picture is the scene's box.
+  void outline(int /*max_depth*/, StructureOutline& out) const override {
+    out.what = "one leaf (the scene box)";
+    if (!bounds_.is_empty()) out.add(OutlineBox{bounds_, 0, true});
+  }
 
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
     tris_ = copy_leaf_triangles(mesh);
+    bounds_ = mesh.bounds();
     BuildStats s;
     s.leaves = mesh.num_triangles() > 0 ? 1 : 0;
     s.nodes = s.leaves;
@@ -36,6 +42,7 @@ class BruteAccel final : public BatchAccelerator<BruteAccel> {
 
  private:
   std::vector<LeafTriangle> tris_;
+  Aabb bounds_;
 };
 
 }  // namespace
@@ -49,6 +56,7 @@ AcceleratorInfo brute_accelerator_info() {
                        }};
   info.caps.mt_variant = "tri=mt";
   info.caps.quadratic = true;
+  info.caps.outline = true;
   info.cover = {"brute:tri=mt"};
   return info;
 }

@@ -3,6 +3,7 @@
 // into:
 //
 //   builder=binned|sweep|sbvh|lbvh   opt=none|reinsert   layout=bvh2|bvh4|bvh8
+//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray packets)
 //
 // Every combination reports the same statistics: build ms, bytes, nodes,
 // leaves, depth and SAH cost of the traced structure (constants in
@@ -23,7 +24,9 @@
 #include "accel/bvh/build_sweep_sah.h"
 #include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/bvh2_layout.h"
+#include "accel/bvh/bvh_outline.h"
 #include "accel/bvh/collapse_wide.h"
+#include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/traverse_wide.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/triangle_test_param.h"
@@ -54,6 +57,7 @@ struct BvhConfig {
   float node_cost = 2.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
+  int packet = 0;  // 16: closest-hit batches as 16-ray packets (traverse_packet.h); bvh8 only
 };
 
 int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
@@ -64,6 +68,7 @@ class Kernel {
   virtual ~Kernel() = default;
   virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const = 0;
   virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const = 0;
+  virtual void outline(int max_depth, StructureOutline& out) const = 0;
 };
 
 class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
@@ -75,6 +80,7 @@ class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_bvh2<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { outline_bvh2(layout_, max_depth, out); }
 
  private:
   Bvh2Layout layout_;
@@ -84,26 +90,44 @@ class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
 // The wide layouts test triangles with the vectorised watertight test only.
 template <int N, int W>
 class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
+  using Batch = BatchAccelerator<WideKernel<N, W>, Kernel>;
+
  public:
-  explicit WideKernel(WideBvh<N, W> bvh)
-      : BatchAccelerator<WideKernel<N, W>, Kernel>(TriangleTest::Watertight), bvh_(std::move(bvh)) {
+  WideKernel(WideBvh<N, W> bvh, bool packets)
+      : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref};
+  }
+
+  // packet=16: uninstrumented closest-hit batches go through the packet
+  // tracer (same answers); counted batches take the single-ray kernel, whose
+  // counters mean what every structure's mean.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
+    if constexpr (N == 8) {
+      if (packets_ && !stats) {
+        PacketTracer<W>(view_).intersect(rays, hits);
+        return;
+      }
+    }
+    Batch::intersect(rays, hits, stats);
   }
 
   template <TriangleTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_wide<N, W, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { outline_wide(bvh_, max_depth, out); }
   size_t bytes() const { return bvh_.bytes(); }
 
  private:
   WideBvh<N, W> bvh_;
+  bool packets_;
   WideView<N, W> view_;
 };
 
 template <int N, int W>
-std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, size_t& bytes) {
-  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh));
+std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
+                                         size_t& bytes) {
+  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh), packets);
   bytes = k->bytes();
   return k;
 }
@@ -124,6 +148,9 @@ class BvhAccel final : public Accelerator {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
     if (!kernel_) throw std::logic_error("bvh: occluded before build");
     kernel_->occluded(rays, occ, stats);
+  }
+  void outline(int max_depth, StructureOutline& out) const override {
+    if (kernel_) kernel_->outline(max_depth, out);
   }
 
  protected:
@@ -245,14 +272,15 @@ class BvhAccel final : public Accelerator {
     if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
       throw std::runtime_error("bvh: tree too deep for the traversal stack");
     const int block = block_width();
+    const bool packets = cfg_.packet == kPacketSize;
     if (cfg_.layout == LayoutKind::Bvh4) {
-      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, bytes);
-      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, bytes);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, bytes);
     } else {
-      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, bytes);
-      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, bytes);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, bytes);
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
@@ -286,7 +314,8 @@ AcceleratorInfo bvh_accelerator_info() {
        {"opt_rounds", "32", "reinsert: at most this many rounds (work-bounded: the tree does not depend on machine load)"},
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
-       triangle_test_param("; mt with layout=bvh2 only")},
+       triangle_test_param("; mt with layout=bvh2 only"),
+       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
         const auto& b = p.choice("builder", {"binned", "sweep", "sbvh", "lbvh"});
@@ -318,13 +347,17 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
           throw SpecError("bvh: ct and ci must be positive");
         c.tri = parse_triangle_test(p);
+        c.packet = p.integer("packet");
+        if (c.packet != 0 && c.packet != kPacketSize) throw SpecError("bvh: packet must be 0 or 16");
+        if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
           throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
         return std::make_unique<BvhAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt,layout=bvh2";
+  info.caps.outline = true;
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
-                "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16"};
+                "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},

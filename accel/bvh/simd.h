@@ -302,11 +302,13 @@ struct vfloat<16> {
   friend vfloat andnot(vfloat a, vfloat b) { return {_mm512_andnot_ps(a.v, b.v)}; }
   friend vfloat min(vfloat a, vfloat b) { return {_mm512_min_ps(a.v, b.v)}; }
   friend vfloat max(vfloat a, vfloat b) { return {_mm512_max_ps(a.v, b.v)}; }
+  // Zero-masking forms with a full mask: GCC 12's unmasked forms read an
+  // undefined vector and trip -Wmaybe-uninitialized (as in sort_network.h).
   friend vfloat min_bits(vfloat a, vfloat b) {
-    return {_mm512_castsi512_ps(_mm512_min_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+    return {_mm512_castsi512_ps(_mm512_maskz_min_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
   }
   friend vfloat max_bits(vfloat a, vfloat b) {
-    return {_mm512_castsi512_ps(_mm512_max_epi32(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+    return {_mm512_castsi512_ps(_mm512_maskz_max_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
   }
   friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
   friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }

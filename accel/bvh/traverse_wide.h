@@ -288,10 +288,13 @@ inline uint64_t count_children(const WideNode<N>& node) {
   return c;
 }
 
+// Walks the subtree `start` for one ray, offering hits to `rec` (which may
+// already hold a hit from elsewhere in the tree: the packet traversal hands
+// diverged rays over this way). Returns when the subtree is done or, any
+// hit, at the first hit.
 template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
-inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
   using V = simd::vfloat<N>;
-  HitRecorder<kAnyHit, kCount> rec(ray, stats);
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
   init_node_ray(nr, ray, kAxisParallel);
@@ -302,7 +305,7 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
 
   alignas(64) uint64_t stack[kWideStackSize];
   int sp = 0;
-  uint32_t cur = bvh.root_ref;
+  uint32_t cur = start;
 
   // Next subtree from the stack that can still hold a closer hit.
   auto pop = [&]() -> bool {
@@ -328,7 +331,7 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
       V tnear;
       uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
       if (mask == 0) {
-        if (!pop()) return rec.hit();
+        if (!pop()) return;
         continue;
       }
       const uint32_t* child = node.child;
@@ -349,10 +352,17 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
       br_ready = true;
     }
     if (intersect_block_leaf<W>(bvh.blocks + wide_ref::leaf_first(cur), wide_ref::leaf_blocks(cur), br, tmin, rec)) {
-      if constexpr (kAnyHit) return rec.hit();
+      if constexpr (kAnyHit) return;
     }
-    if (!pop()) return rec.hit();
+    if (!pop()) return;
   }
+}
+
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
+inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
+  walk_wide<N, W, kAnyHit, kCount, kAxisParallel>(bvh, ray, bvh.root_ref, rec);
+  return rec.hit();
 }
 
 // The traversal entry point: validity check, then the kernel for the ray's kind.

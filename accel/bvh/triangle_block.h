@@ -157,7 +157,7 @@ template <int W, typename Recorder>
     if constexpr (!Recorder::kStopAtFirstHit) {
       for (m &= m - 1; m != 0; m &= m - 1) {
         const uint32_t i = simd::ctz(m);
-        if (bh.t[i] < bt) {
+        if (bh.t[i] < bt || (bh.t[i] == bt && blk[b].prim[i] < blk[b].prim[best])) {  // ties: see HitRecorder
           bt = bh.t[i];
           best = i;
         }

@@ -39,10 +39,15 @@ class HitRecorder {
 
   // Hit acceptance, the one rule: a candidate the triangle test reported
   // within [tmin, tmax()] is kept when it is strictly nearer than the hit so
-  // far, or when it is the first; among exact ties the first one found stays.
+  // far, or when it is the first; among exact ties the lower primitive id
+  // wins. The answer is then the least (t, prim) pair over every triangle
+  // hit, whatever order a traversal visits them in (a packet and a single-ray
+  // walk of the same tree agree bit for bit; so does the brute-force scan).
+  // The first candidate is always kept: the triangle tests report t <= tmax
+  // and the miss id kInvalidPrim exceeds every primitive id.
   // Returns true when the candidate was kept.
   [[gnu::always_inline]] bool record(float t, float u, float v, uint32_t prim) {
-    if (t < tmax_ || !hit_.valid()) {
+    if (t < tmax_ || (t == tmax_ && prim < hit_.prim)) {
       hit_ = Hit{t, u, v, prim};
       tmax_ = t;
       return true;

@@ -97,6 +97,17 @@ class EmbreeAccel final : public Accelerator {
   }
   bool coherent() const { return coherent_; }
 
+  // Embree's BVH is opaque (no public node access): the picture is its root
+  // box only, and Capabilities::outline stays false.
+  void outline(int /*max_depth*/, StructureOutline& out) const override {
+    out.what = "root box only (Embree's nodes are not exposed)";
+    if (!scene_) return;
+    RTCBounds b;
+    rtcGetSceneBounds(scene_, &b);
+    const Aabb box(Vec3f(b.lower_x, b.lower_y, b.lower_z), Vec3f(b.upper_x, b.upper_y, b.upper_z));
+    if (!box.is_empty()) out.add(OutlineBox{box, 0, false});
+  }
+
   BuildStats build_impl(const TriangleMesh& mesh) override {
     // Embree reads vertex buffers with 16-byte loads: pad the last vertex by one float.
     vertices_.assign(mesh.vertices.size() * 3 + 1, 0.0f);

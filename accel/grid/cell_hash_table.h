@@ -62,6 +62,8 @@ class CellHashTable {
   }
 
   size_t capacity() const { return slots_.size(); }
+  // Every slot, free ones with key kEmptyKey (for pictures and checks, not traversal).
+  const std::vector<CellSlot>& slots() const { return slots_; }
   size_t bytes() const { return slots_.capacity() * sizeof(CellSlot); }
 
  private:

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/grid/grid_outline.h"
 #include "accel/grid/traverse_hash_grid.h"
 #include "accel/grid/traverse_two_level_grid.h"
 #include "accel/grid/traverse_uniform_grid.h"
@@ -22,6 +23,7 @@ class GridAccel final : public BatchAccelerator<GridAccel<Grid, kBuild>> {
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_grid<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
+  void outline(int max_depth, StructureOutline& out) const override { grid_outline(grid_, max_depth, out); }
 
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {

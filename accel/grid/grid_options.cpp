@@ -49,6 +49,7 @@ void warn_budget_capped(const std::string& owner, const std::string& requested, 
 void complete_grid_info(AcceleratorInfo& info) {
   const bool two_level = info.name == "grid2";
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox"};
   info.stats = {{"cells", two_level ? "sub-grid cells" : "cells"},
                 {"nonempty_cells", "cells holding at least one triangle"},

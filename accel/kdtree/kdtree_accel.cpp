@@ -9,6 +9,7 @@
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/kdtree/kdtree_outline.h"
 #include "accel/kdtree/traverse_kdtree.h"
 
 namespace raylab {
@@ -28,6 +29,9 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
       if (view_.blocks) return traverse_kdtree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
     }
     return traverse_kdtree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+  }
+  void outline(int max_depth, StructureOutline& out) const override {
+    outline_kdtree(view_.bounds, nodes_, max_depth, out);
   }
 
  protected:
@@ -140,6 +144,7 @@ AcceleratorInfo kdtree_accelerator_info() {
       }};
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
+  info.caps.outline = true;
   info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0"};
   info.stats = {{"inner_nodes", "inner nodes"},
                 {"empty_leaves", "leaves without triangles"},

@@ -1,0 +1,153 @@
+#include "accel/octree/octree_accel.h"
+
+#include <fmt/format.h>
+
+#include "accel/core/batch_accelerator.h"
+#include "accel/core/triangle_test_param.h"
+#include "accel/octree/build_octree.h"
+#include "accel/octree/traverse_octree.h"
+
+namespace raylab {
+
+namespace {
+
+struct OctreeOptions {
+  OctreeBuildOptions build;
+  OctreeStorage storage = OctreeStorage::Pointer;
+  double budget_mib = 2048.0;
+};
+
+template <typename Layout>
+class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
+ public:
+  OctreeAccel(const OctreeOptions& opt, TriangleTest test) : BatchAccelerator<OctreeAccel<Layout>>(test), opt_(opt) {}
+
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    return traverse_octree<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+
+ protected:
+  BuildStats build_impl(const TriangleMesh& mesh) override {
+    OctreeTree tree = build_octree(mesh, opt_.build);
+    const OctreeShape shape = measure_octree(tree);
+    // Each referenced triangle copied once, in first-use order, nodes keep
+    // indices into that copy (as the k-d tree does).
+    std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
+    std::vector<uint32_t> first_use;
+    ids_.resize(tree.refs.size());
+    for (size_t i = 0; i < tree.refs.size(); ++i) {
+      const uint32_t id = tree.refs[i];
+      if (slot[id] == UINT32_MAX) {
+        slot[id] = static_cast<uint32_t>(first_use.size());
+        first_use.push_back(id);
+      }
+      ids_[i] = slot[id];
+    }
+    tris_ = copy_leaf_triangles(mesh, first_use);
+    const size_t shared_bytes = tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t);
+    const size_t hash_entries = std::max<size_t>(shape.nonempty_nodes, 1);
+    const size_t pointer_bytes = tree.nodes.size() * sizeof(OctreeNode);
+    const double linear_bytes = static_cast<double>(octree_linear_slots(shape.max_depth)) * sizeof(OctLinearSlot);
+    const size_t hash_bytes = octree_hash_capacity(hash_entries) * sizeof(OctHashEntry);
+
+    size_t layout_bytes = 0;
+    if constexpr (std::is_same_v<Layout, OctPointerLayout>) {
+      nodes_ = std::move(tree.nodes);
+      view_.layout.nodes = nodes_.data();
+      layout_bytes = pointer_bytes;
+    } else if constexpr (std::is_same_v<Layout, OctLinearLayout>) {
+      slots_ = make_octree_linear(tree, shape.max_depth, static_cast<uint64_t>(opt_.budget_mib * 1024.0 * 1024.0));
+      view_.layout.slots = slots_.data();
+      layout_bytes = slots_.size() * sizeof(OctLinearSlot);
+    } else {
+      table_ = make_octree_hash(tree, hash_entries, view_.layout);
+      view_.layout.table = table_.data();
+      layout_bytes = table_.size() * sizeof(OctHashEntry);
+    }
+    view_.cube = tree.cube;
+    view_.tris = tris_.data();
+    view_.ids = ids_.data();
+    view_.empty = mesh.num_triangles() == 0;
+
+    BuildStats s;
+    const double n = static_cast<double>(mesh.num_triangles());
+    s.nodes = shape.nodes;
+    s.leaves = shape.leaves;
+    s.max_depth = shape.max_depth;
+    s.avg_depth = shape.avg_leaf_depth;
+    s.sah_cost = shape.sah_cost;
+    s.bytes = layout_bytes + shared_bytes;
+    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
+    s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
+    s.extra["references"] = static_cast<double>(shape.references);
+    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
+    s.extra["inner_references"] = static_cast<double>(shape.inner_references);
+    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
+    s.extra["nonempty_nodes"] = static_cast<double>(shape.nonempty_nodes);
+    s.extra["pointer_layout_bytes"] = static_cast<double>(pointer_bytes);
+    s.extra["linear_layout_bytes"] = linear_bytes;
+    s.extra["hash_layout_bytes"] = static_cast<double>(hash_bytes);
+    return s;
+  }
+
+ private:
+  OctreeOptions opt_;
+  std::vector<OctreeNode> nodes_;
+  std::vector<OctLinearSlot> slots_;
+  std::vector<OctHashEntry> table_;
+  std::vector<LeafTriangle> tris_;
+  std::vector<uint32_t> ids_;
+  OctreeView<Layout> view_;
+};
+
+}  // namespace
+
+AcceleratorInfo octree_accelerator_info() {
+  AcceleratorInfo info{
+      "octree",
+      "regular octree over the bounding cube, exact SAT assignment, parametric traversal (Revelles et al. 2000)",
+      {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
+       {"max_depth", "10", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)"},
+       {"assign", "exact", "exact (every leaf the triangle overlaps, SAT) or straddle (triangles crossing a "
+                           "dividing plane stay at the inner node, each stored once)"},
+       {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
+                              "children by index arithmetic) or hash (Morton location codes, occupied nodes only)"},
+       {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB"},
+       triangle_test_param()},
+      [](const Params& p) -> std::unique_ptr<Accelerator> {
+        OctreeOptions opt;
+        const int leaf = p.integer("leaf");
+        if (leaf < 1 || leaf > 1000) throw SpecError("octree: leaf must be in 1..1000");
+        opt.build.leaf = static_cast<uint32_t>(leaf);
+        opt.build.max_depth = p.integer("max_depth");
+        if (!p.given("max_depth") && p.str("storage") == "linear") opt.build.max_depth = 6;
+        if (opt.build.max_depth < 0 || opt.build.max_depth > kOctMaxLevel)
+          throw SpecError(fmt::format("octree: max_depth must be in 0..{}", kOctMaxLevel));
+        opt.build.assign = p.choice("assign", {"exact", "straddle"}) == "straddle" ? OctreeAssign::Straddle
+                                                                                   : OctreeAssign::Exact;
+        const std::string& storage = p.choice("storage", {"pointer", "linear", "hash"});
+        opt.budget_mib = p.real("budget");
+        if (!(opt.budget_mib > 0.0 && opt.budget_mib <= 1e6)) throw SpecError("octree: budget must be in (0, 1e6] MiB");
+        if (p.given("budget") && storage != "linear") throw SpecError("octree: budget applies to storage=linear only");
+        const TriangleTest test = parse_triangle_test(p);
+        if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
+        if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
+        return std::make_unique<OctreeAccel<OctPointerLayout>>(opt, test);
+      }};
+  info.caps.mt_variant = "tri=mt";
+  info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash"};
+  info.stats = {{"inner_nodes", "inner nodes"},
+                {"empty_leaves", "leaves without triangles"},
+                {"references", "triangle references in all nodes"},
+                {"refs_per_triangle", "references per triangle (exact assignment duplicates straddling triangles)"},
+                {"inner_references", "references held by inner nodes (assign=straddle)"},
+                {"max_leaf_size", "largest leaf, in triangles"},
+                {"nonempty_nodes", "nodes with triangles in their subtree (the hashed layout's entries)"},
+                {"pointer_layout_bytes", "node memory of storage=pointer for this tree"},
+                {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
+                {"hash_layout_bytes", "node memory of storage=hash for this tree"}};
+  return info;
+}
+
+}  // namespace raylab

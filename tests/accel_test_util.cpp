@@ -1,0 +1,181 @@
+#include "tests/accel_test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "accel/registry.h"
+#include "base/pcg.h"
+#include "tests/test_util.h"
+
+namespace raylab::test {
+
+NamedMesh soup(size_t n, uint64_t seed, float size) {
+  return {fmt::format("soup:n={},seed={}", n, seed), triangle_soup_mesh(n, seed, size)};
+}
+
+TriangleMesh flat_tiles_mesh(int tiles, size_t extra, uint64_t seed) {
+  TriangleMesh m;
+  const float z = 0.5f;
+  for (int i = 0; i < tiles; ++i)
+    for (int j = 0; j < tiles; ++j) {
+      const float x0 = static_cast<float>(i) / tiles, x1 = static_cast<float>(i + 1) / tiles;
+      const float y0 = static_cast<float>(j) / tiles, y1 = static_cast<float>(j + 1) / tiles;
+      append_triangle(m, {x0, y0, z}, {x1, y0, z}, {x1, y1, z});
+      append_triangle(m, {x0, y0, z}, {x1, y1, z}, {x0, y1, z});
+    }
+  Pcg32 rng(seed, 5);
+  for (size_t i = 0; i < extra; ++i) {
+    const Vec3f c(rng.uniform(), rng.uniform(), z);
+    append_triangle(m, c, c + Vec3f(0.05f * rng.uniform(), 0.01f, 0), c + Vec3f(0.01f, 0.05f * rng.uniform(), 0));
+  }
+  return m;
+}
+
+TriangleMesh teapot_in_stadium_mesh() {
+  TriangleMesh m;
+  const float h = 500.0f;
+  const Vec3f c[8] = {{-h, -h, -h}, {h, -h, -h}, {h, h, -h}, {-h, h, -h},
+                      {-h, -h, h},  {h, -h, h},  {h, h, h},  {-h, h, h}};
+  auto quad = [&](int a, int b, int cc, int d) {
+    append_triangle(m, c[a], c[b], c[cc]);
+    append_triangle(m, c[a], c[cc], c[d]);
+  };
+  quad(0, 1, 5, 4);  // y = -h
+  quad(3, 7, 6, 2);  // y = +h
+  quad(0, 4, 7, 3);  // x = -h
+  quad(1, 2, 6, 5);  // x = +h
+  quad(4, 5, 6, 7);  // z = +h
+  // Floor z = -h as a 20x20 tiling.
+  const int n = 20;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const float x0 = -h + 2 * h * i / n, x1 = -h + 2 * h * (i + 1) / n;
+      const float y0 = -h + 2 * h * j / n, y1 = -h + 2 * h * (j + 1) / n;
+      append_triangle(m, {x0, y0, -h}, {x1, y1, -h}, {x1, y0, -h});
+      append_triangle(m, {x0, y0, -h}, {x0, y1, -h}, {x1, y1, -h});
+    }
+  append_triangle(m, {-300, -300, 0.99f}, {300, -300, 0.99f}, {0, 300, 0.99f});
+  m.append(make_uv_sphere(90, 45, kStadiumObject, 0.5f));
+  return m;
+}
+
+std::vector<Ray> camera_rays(const TriangleMesh& mesh, int width, int height) {
+  const Aabb b = mesh.bounds();
+  const Vec3f c = b.center(), d = 1.1f * b.diagonal();
+  const float size = std::max(d.norm(), 1e-3f);
+  const Vec3f eye = c + size * Vec3f(0.15f, 0.1f, -1.5f);
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<size_t>(width) * height);
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      const Vec3f target(c.x() + d.x() * ((i + 0.5f) / width - 0.5f), c.y() + d.y() * ((j + 0.5f) / height - 0.5f),
+                         c.z());
+      rays.emplace_back(eye, (target - eye).normalized());
+    }
+  return rays;
+}
+
+std::vector<Ray> mesh_test_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
+  Pcg32 rng(seed, 11);
+  const Aabb b = mesh.bounds();
+  const Vec3f d = b.diagonal();
+  std::vector<Ray> rays;
+  for (size_t i = 0; i < count; ++i) {
+    const Vec3f org = b.lo - 0.1f * d + Vec3f(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(1.2f * d);
+    if (i % 2 == 0 || mesh.num_triangles() == 0) {
+      rays.emplace_back(org, random_direction(rng));
+    } else {
+      const size_t t = rng.next() % mesh.num_triangles();
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      if (i % 6 == 1) v = 0;          // on an edge
+      if (i % 12 == 3) u = v = 0;     // on a vertex
+      const Vec3f target = (1 - u - v) * mesh.vertex(t, 0) + u * mesh.vertex(t, 1) + v * mesh.vertex(t, 2);
+      const Vec3f dir = target - org;
+      if (dir.squaredNorm() > 0) rays.emplace_back(org, dir.normalized());
+    }
+  }
+  return rays;
+}
+
+std::vector<Ray> segment_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
+  const Aabb b = mesh.bounds();
+  const Vec3f margin = Vec3f::Constant(0.05f * std::max(b.diagonal().norm(), 1e-30f));
+  const Vec3f lo = b.lo - margin, ext = b.diagonal() + 2.0f * margin;
+  Pcg32 rng(seed, 17);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  while (rays.size() < count) {
+    const Vec3f a = lo + ext.cwiseProduct(Vec3f(rng.uniform(), rng.uniform(), rng.uniform()));
+    const Vec3f c = lo + ext.cwiseProduct(Vec3f(rng.uniform(), rng.uniform(), rng.uniform()));
+    const float len = (c - a).norm();
+    if (len > 0.0f) rays.emplace_back(a, Vec3f((c - a) / len), 0.0f, len);
+  }
+  return rays;
+}
+
+std::vector<Ray> surface_rays(const TriangleMesh& mesh, std::span<const Ray> rays, std::span<const Hit> hits,
+                              uint64_t seed) {
+  Pcg32 rng(seed, 13);
+  const float offset = 1e-5f * mesh.bounds().diagonal().norm();
+  std::vector<Ray> out;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (!hits[i].valid()) continue;
+    const Hit& h = hits[i];
+    const Vec3f p = (1 - h.u - h.v) * mesh.vertex(h.prim, 0) + h.u * mesh.vertex(h.prim, 1) +
+                    h.v * mesh.vertex(h.prim, 2);
+    Vec3f n = (mesh.vertex(h.prim, 1) - mesh.vertex(h.prim, 0)).cross(mesh.vertex(h.prim, 2) - mesh.vertex(h.prim, 0));
+    if (n.squaredNorm() == 0) continue;
+    n.normalize();
+    if (n.dot(rays[i].dir) > 0) n = -n;  // the side the ray came from
+    Vec3f w = random_direction(rng);
+    if (w.dot(n) < 0) w = -w;
+    out.emplace_back(Vec3f(p + offset * n), w);
+  }
+  return out;
+}
+
+BruteReference brute_reference(const TriangleMesh& mesh, std::span<const Ray> rays) {
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  BruteReference ref{std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size())};
+  brute->intersect(rays, ref.hits);
+  brute->occluded(rays, ref.occluded);
+  return ref;
+}
+
+Disagreement compare_with_brute(const Accelerator& accel, const BruteReference& ref, std::span<const Ray> rays,
+                                const std::string& what, float tie_rel) {
+  const size_t n = rays.size();
+  std::vector<Hit> got(n);
+  std::vector<uint8_t> occ(n);
+  accel.intersect(rays, got);
+  accel.occluded(rays, occ);
+  Disagreement d;
+  for (size_t i = 0; i < n; ++i) {
+    const Hit& a = got[i];
+    const Hit& b = ref.hits[i];
+    d.reference_hits += b.valid();
+    const float scale = rays[i].org.cwiseAbs().maxCoeff() + std::fabs(b.t);
+    const bool tie = a.t == b.t || std::fabs(a.t - b.t) <= tie_rel * scale;
+    if (a.valid() != b.valid() || (a.valid() && a.prim != b.prim && !tie)) {
+      if (d.closest++ < 3)
+        ADD_FAILURE() << what << " ray " << i << " org " << rays[i].org.transpose() << " dir "
+                      << rays[i].dir.transpose() << " [" << rays[i].tmin << ", " << rays[i].tmax << "]: got prim "
+                      << a.prim << " t " << a.t << ", brute prim " << b.prim << " t " << b.t;
+    } else if (a.valid() && a.prim == b.prim && (a.t != b.t || a.u != b.u || a.v != b.v)) {
+      if (d.barycentric++ < 3)
+        ADD_FAILURE() << what << " ray " << i << " prim " << a.prim << ": (t, u, v) = (" << a.t << ", " << a.u << ", "
+                      << a.v << "), brute (" << b.t << ", " << b.u << ", " << b.v << ")";
+    }
+    if ((occ[i] != 0) != b.valid() && d.occlusion++ < 3)
+      ADD_FAILURE() << what << " ray " << i << ": occluded " << int(occ[i]) << " but closest hit "
+                    << (b.valid() ? "hits" : "misses");
+  }
+  return d;
+}
+
+}  // namespace raylab::test
