@@ -198,7 +198,7 @@ namespace {
 // so it must give exactly the same hits (distance, barycentrics, triangle),
 // the same occlusion answers and the same counted work as the default.
 TEST(Registry, ScalarVariantGivesIdenticalHits) {
-  const Scene soup = make_triangle_soup(3000, 17);
+  const test::NamedMesh soup = test::soup(3000, 17);
   const TriangleMesh sphere = make_uv_sphere(48, 24);
   size_t structures = 0;
   for (const auto& info : accelerator_registry()) {
