@@ -20,6 +20,11 @@ struct Capabilities {
   std::string mt_variant;
   // Spec parameters of a robust mode ("robust=1"); empty when none.
   std::string robust_variant;
+  // Spec parameters that run the structure with scalar kernels only
+  // ("simd=0": no SIMD node or leaf tests, the same triangle test and the
+  // same hits), for the algorithm-only comparison; empty when the structure
+  // has no SIMD kernels.
+  std::string scalar_variant;
   bool per_ray_counters = true;  // the instrumented kernels count nodes and triangle tests
   bool quadratic = false;        // cost grows with rays x triangles: benches skip large scenes
   bool reference = false;        // the reference the others are compared with (its failures do not count)

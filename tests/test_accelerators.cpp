@@ -178,3 +178,57 @@ TEST(Registry, CoverageSpecsAllBuildAndNameTheirStructure) {
 
 }  // namespace
 }  // namespace raylab
+
+namespace raylab {
+namespace {
+
+// Issue 17: a structure's scalar variant (caps.scalar_variant, "simd=0")
+// runs the same algorithm and the same triangle test without SIMD kernels,
+// so it must give exactly the same hits (distance, barycentrics, triangle),
+// the same occlusion answers and the same counted work as the default.
+TEST(Registry, ScalarVariantGivesIdenticalHits) {
+  const test::NamedMesh soup = test::soup(3000, 17);
+  const TriangleMesh sphere = make_uv_sphere(48, 24);
+  size_t structures = 0;
+  for (const auto& info : accelerator_registry()) {
+    if (info.caps.scalar_variant.empty()) continue;
+    ++structures;
+    for (const TriangleMesh* mesh : {&soup.mesh, &sphere}) {
+      // Origins in the mesh's box (inside the sphere, among the soup), random directions.
+      std::vector<Ray> rays;
+      Pcg32 rng(5, 17);
+      const Aabb box = mesh->bounds();
+      for (int i = 0; i < 3000; ++i) {
+        const Vec3f u(rng.uniform(), rng.uniform(), rng.uniform());
+        rays.emplace_back(Vec3f(box.lo + u.cwiseProduct(box.hi - box.lo)), test::random_direction(rng));
+      }
+      auto simd = make_accelerator(info.name);
+      auto scalar = make_accelerator(info.name + ":" + info.caps.scalar_variant);
+      simd->build(*mesh);
+      scalar->build(*mesh);
+      std::vector<Hit> a(rays.size()), b(rays.size());
+      std::vector<uint8_t> oa(rays.size()), ob(rays.size());
+      TraversalStats sa, sb;
+      simd->intersect(rays, a, &sa);
+      scalar->intersect(rays, b, &sb);
+      simd->occluded(rays, oa);
+      scalar->occluded(rays, ob);
+      size_t hits = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        hits += a[i].valid();
+        ASSERT_EQ(a[i].prim, b[i].prim) << info.name << " ray " << i;
+        ASSERT_EQ(a[i].t, b[i].t) << info.name << " ray " << i;
+        ASSERT_EQ(a[i].u, b[i].u) << info.name << " ray " << i;
+        ASSERT_EQ(a[i].v, b[i].v) << info.name << " ray " << i;
+        ASSERT_EQ(oa[i], ob[i]) << info.name << " ray " << i;
+      }
+      EXPECT_GT(hits, rays.size() / 10) << info.name;
+      EXPECT_EQ(sa.nodes_visited, sb.nodes_visited) << info.name;
+      EXPECT_EQ(sa.triangle_tests, sb.triangle_tests) << info.name;
+    }
+  }
+  EXPECT_GT(structures, 0u);
+}
+
+}  // namespace
+}  // namespace raylab

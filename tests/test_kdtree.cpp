@@ -742,8 +742,16 @@ TEST(KdTreeStats, BuildAndTraversalFiguresAreReported) {
   EXPECT_GT(s.avg_depth, 1.0);
   EXPECT_TRUE(std::isfinite(s.sah_cost));
   EXPECT_GT(s.sah_cost, 1.0);
-  // Nodes (8 bytes), one 40-byte copy per triangle, one index per reference.
-  EXPECT_EQ(s.bytes, s.nodes * 8 + mesh.num_triangles() * 40 + static_cast<size_t>(s.extra.at("references")) * 4);
+  // SIMD leaves: nodes (8 bytes) and 4-wide triangle blocks (160 bytes), at
+  // least one block per 4 references.
+  const double blocks = s.extra.at("leaf_blocks");
+  EXPECT_GE(blocks * 4, s.extra.at("references"));
+  EXPECT_EQ(s.bytes, s.nodes * 8 + static_cast<size_t>(blocks) * 160);
+  // Scalar leaves: nodes, one 40-byte copy per triangle, one index per reference.
+  const Built scalar = build("kdtree:simd=0", mesh);
+  EXPECT_EQ(scalar.stats.extra.at("leaf_blocks"), 0.0);
+  EXPECT_EQ(scalar.stats.bytes, scalar.stats.nodes * 8 + mesh.num_triangles() * 40 +
+                                    static_cast<size_t>(scalar.stats.extra.at("references")) * 4);
 
   // The SAH tree is cheaper than the spatial median one by its own measure.
   const Built median = build("kdtree:builder=median", mesh);

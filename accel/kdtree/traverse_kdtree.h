@@ -44,9 +44,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/kdtree/kdtree_node.h"
 
 namespace raylab {
@@ -60,6 +62,8 @@ struct KdTreeView {
   // The node the walk starts at and whose cell `bounds` is: the root, or an
   // entry node of a subtree (accel/hybrid's entry-point grid).
   uint32_t root = 0;
+  // SIMD leaves (kd_leaf_blocks.h): a leaf's offset is then its first block.
+  const KdTriangleBlock* blocks = nullptr;
 };
 
 // The margin delta as a fraction of M (8 ulps of M).
@@ -112,7 +116,9 @@ struct KdRay {
   return t0 <= t1;
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+// kBlocks: leaves are SIMD triangle blocks (watertight test only); else
+// indices into the scalar triangle copies.
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
 inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
@@ -125,7 +131,9 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   const float delta_t = kr.delta_t;
   float t0 = kr.t0, t1 = kr.t1;
 
-  const TrianglePrecompute<kTest> pre(ray);
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
+  using LeafRay = std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, TrianglePrecompute<kTest>>;
+  const LeafRay pre(ray);
 
   struct Entry {
     uint32_t node;
@@ -162,8 +170,13 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
     }
 
     rec.count_nodes(1);
-    if (intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.offset(), n.count(), rec)) {
-      if constexpr (kAnyHit) return rec.hit();
+    bool kept;
+    if constexpr (kBlocks)
+      kept = intersect_block_leaf<kKdBlockWidth>(tree.blocks + n.offset(), kd_leaf_blocks(n.count()), pre, ray.tmin, rec);
+    else
+      kept = intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.offset(), n.count(), rec);
+    if constexpr (kAnyHit) {
+      if (kept) return rec.hit();
     }
 
     // Next cell that can still hold a closer hit; cells starting beyond the
