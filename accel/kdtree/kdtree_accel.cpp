@@ -63,7 +63,7 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
       tris_ = copy_leaf_triangles(mesh, first_use);
     }
     view_ = KdTreeView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                       blocks_wanted_ ? blocks_.data() : nullptr};
+                       /*root=*/0, blocks_wanted_ ? blocks_.data() : nullptr};
 
     BuildStats s;
     const KdTreeShape shape = measure_kdtree(tree.bounds, nodes_);
