@@ -479,7 +479,7 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
   EXPECT_LT(grid2, 50.0);
 }
 
-TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {
+TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {  // and the wide BVH
   // Issue 17: the cell margin was sized from the absolute coordinates, so a
   // sphere of radius 8 at 3e5 had a margin (0.6) as large as a cell and
   // every cell listed its neighbours' triangles. Counted work, not time:
@@ -517,6 +517,22 @@ TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {
     EXPECT_LT(far_cells, 1.25 * near_cells) << spec;
     EXPECT_GT(far_cells, 0.8 * near_cells) << spec;
     EXPECT_LT(far_tests, 1.5 * near_tests) << spec;  // the old margin: 5-11x
+  }
+  // The wide BVH's FMA box test is exact only to 2^-22 |origin| (0.07 at 3e5):
+  // on a radius-1 sphere there every ray entered the boxes of its neighbours
+  // too (40x the triangle tests) until such rays took the exact kernel.
+  const TriangleMesh near_small = make_uv_sphere(128, 64, Vec3f::Zero(), 1.0f);
+  const TriangleMesh far_small = make_uv_sphere(128, 64, offset, 1.0f);
+  std::vector<Ray> near_small_rays, far_small_rays;
+  for (const Ray& r : near_rays) {
+    near_small_rays.emplace_back(Vec3f(r.org / radius), r.dir);
+    far_small_rays.emplace_back(Vec3f(r.org / radius + offset), r.dir);
+  }
+  for (const std::string spec : {"bvh", "bvh:layout=bvh4", "bvh:packet=16"}) {
+    const auto [near_nodes, near_tests] = work(spec, near_small, near_small_rays);
+    const auto [far_nodes, far_tests] = work(spec, far_small, far_small_rays);
+    EXPECT_LT(far_nodes, 1.5 * near_nodes) << spec;
+    EXPECT_LT(far_tests, 1.5 * near_tests) << spec;
   }
 }
 

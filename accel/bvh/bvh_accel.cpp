@@ -114,7 +114,7 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
  public:
   WideKernel(WideBvh<N, W> bvh, bool packets)
       : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
-    view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref};
+    view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref, wide_fma_origin_limit(bvh_.root_box)};
   }
 
   // packet=16: uninstrumented closest-hit batches go through the packet

@@ -71,7 +71,9 @@ struct PacketTriangleRays {
 };
 
 // True when the ray may join a packet: what the fast single-ray kernel takes.
-inline bool packet_ray_ok(const Ray& r) { return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f; }
+inline bool packet_ray_ok(const Ray& r, float fma_origin_limit) {
+  return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f && !origin_beyond(r, fma_origin_limit);
+}
 
 // Direction octant (bit a = sign of component a).
 inline int ray_octant(const Ray& r) {
@@ -122,7 +124,7 @@ class PacketTracer {
     bool coherent = true;
     const Ray* first = nullptr;
     for (size_t i = 0; i < rays.size(); ++i) {
-      if (!packet_ray_ok(rays[i])) {
+      if (!packet_ray_ok(rays[i], bvh_.fma_origin_limit)) {
         trace_single(rays[i], hits[i]);
         continue;
       }
