@@ -8,6 +8,7 @@
 #include "accel/core/triangle_test_param.h"
 #include "accel/hybrid/traverse_entry_grid.h"
 #include "accel/hybrid/traverse_grid_of_trees.h"
+#include "accel/structure_outline.h"
 
 namespace raylab {
 
@@ -35,6 +36,26 @@ void add_top_stats(BuildStats& s, const TopGrid& top, size_t triangles) {
   }
 }
 
+// Structure pictures (raylab show): depth 0 the top grid's box, depth 1 its
+// cells — those holding a tree (grid of trees), or every cell, marked as a
+// leaf when its entry node lies below the root (entry grid). The cells' own
+// trees are not drawn.
+void top_grid_outline(const DdaGrid& g, int max_depth, StructureOutline& out, auto&& cell_drawn) {
+  Aabb box;
+  for (int a = 0; a < 3; ++a) {
+    box.lo[a] = static_cast<float>(g.boundary(a, 0));
+    box.hi[a] = static_cast<float>(g.boundary(a, g.res[a]));
+  }
+  if (!out.add(OutlineBox{box, 0, false}) || max_depth < 1) return;
+  uint64_t c = 0;
+  for (int32_t z = 0; z < g.res[2]; ++z)
+    for (int32_t y = 0; y < g.res[1]; ++y)
+      for (int32_t x = 0; x < g.res[0]; ++x, ++c) {
+        const int drawn = cell_drawn(c);  // 0: no, 1: cell, 2: leaf-marked cell
+        if (drawn && !out.add(OutlineBox{top_cell_box(g, x, y, z), 1, drawn == 2})) return;
+      }
+}
+
 // Grid of trees; `Forest` is CellBvhForest or CellKdForest.
 template <typename Forest>
 class GridOfTreesAccel final : public BatchAccelerator<GridOfTreesAccel<Forest>> {
@@ -47,6 +68,12 @@ class GridOfTreesAccel final : public BatchAccelerator<GridOfTreesAccel<Forest>>
       if constexpr (std::is_same_v<Forest, CellBvhForest>) return traverse_bvh2<kTest, kAnyHit, kCount>(tree, r, st);
       else return traverse_kdtree<kTest, kAnyHit, kCount>(tree, r, st);
     });
+  }
+
+  void outline(int max_depth, StructureOutline& out) const override {
+    out.what = "top-grid cells holding a tree";
+    if (top_.empty) return;
+    top_grid_outline(top_.dda, max_depth, out, [&](uint64_t c) { return forest_.cell_tree[c] != kNoCellTree ? 2 : 0; });
   }
 
  protected:
@@ -93,6 +120,12 @@ class EntryGridAccel final : public BatchAccelerator<EntryGridAccel> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_entry_grid<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+
+  void outline(int max_depth, StructureOutline& out) const override {
+    out.what = "entry-grid cells (filled: entry node below the root)";
+    if (grid_.top.empty) return;
+    top_grid_outline(grid_.top.dda, max_depth, out, [&](uint64_t c) { return grid_.entry[c].node != 0 ? 2 : 1; });
   }
 
  protected:
@@ -157,6 +190,7 @@ AcceleratorInfo hybrid_accelerator_info() {
         return std::make_unique<EntryGridAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   info.cover = {"hybrid:inner=kdtree", "hybrid:inner=entry", "hybrid:tri=mt"};
   info.stats = {{"top_cells", "cells of the top grid"},
                 {"res_x", "top grid cells along x"},
