@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include "accel/bsp/build_bsp.h"
+#include "accel/bsp/convex_polytope.h"
 #include "accel/bsp/traverse_bsp.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/triangle_test_param.h"
+#include "accel/structure_outline.h"
 
 namespace raylab {
 
@@ -18,6 +20,18 @@ class BspAccel final : public BatchAccelerator<BspAccel> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return traverse_bsp<kTest, kAnyHit, kCount>(view_, ray, stats);
+  }
+
+  // Depth 0: the scene box; an inner node at depth k draws its split plane
+  // clipped to the node's region (the cap face its split creates) as
+  // segments of depth k + 1. Regions are recomputed by splitting the root
+  // box (ConvexPolytope, as the builder does); leaves draw nothing.
+  void outline(int max_depth, StructureOutline& out) const override {
+    out.what = "split planes clipped to their node regions";
+    if (view_.empty || nodes_.empty()) return;
+    const Aabb& b = view_.bounds;
+    if (!out.add(OutlineBox{b, 0, false}) || max_depth < 1) return;
+    outline_node(0, ConvexPolytope::box(b.lo.cast<double>(), b.hi.cast<double>()), 0, max_depth, out);
   }
 
  protected:
@@ -59,6 +73,30 @@ class BspAccel final : public BatchAccelerator<BspAccel> {
   }
 
  private:
+  bool outline_node(uint32_t index, const ConvexPolytope& region, int depth, int max_depth,
+                    StructureOutline& out) const {
+    const BspNode& node = nodes_[index];
+    if (node.is_leaf() || depth + 1 > max_depth || region.empty()) return true;
+    const Vec3d n(node.n[0], node.n[1], node.n[2]);
+    const double d = node.d;
+    auto [below, above] = region.split(n, d);
+    // The cap: the face of `below` lying in the plane.
+    const double tol = 1e-9 * (1.0 + std::abs(d)) * (1.0 + n.norm());
+    for (const auto& face : below.faces) {
+      bool in_plane = face.size() >= 3;
+      for (const Vec3d& v : face) in_plane = in_plane && std::abs(n.dot(v) - d) <= tol;
+      if (!in_plane) continue;
+      for (size_t i = 0; i < face.size(); ++i) {
+        const Vec3d& a = face[i];
+        const Vec3d& c = face[(i + 1) % face.size()];
+        if (!out.add(OutlineSegment{a.cast<float>(), c.cast<float>(), depth + 1})) return false;
+      }
+      break;
+    }
+    return outline_node(node.index, below, depth + 1, max_depth, out) &&
+           outline_node(node.index + 1, above, depth + 1, max_depth, out);
+  }
+
   BspBuildOptions opt_;
   std::vector<BspNode> nodes_;
   std::vector<LeafTriangle> tris_;
@@ -103,6 +141,7 @@ AcceleratorInfo bsp_accelerator_info() {
         return std::make_unique<BspAccel>(o, parse_triangle_test(p));
       }};
   info.caps.mt_variant = "tri=mt";
+  info.caps.outline = true;
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time
   // (the BSP build is slow), so they are covered by tests/test_bsp.cpp only.
