@@ -31,14 +31,22 @@
 // plane gets NaN, which every comparison below treats as "visit", and a ray
 // starting inside the cube starts with t0 = tmin in the child holding its
 // origin. So the walk finds every hit brute force finds, bit for bit.
+//
+// Node lists: by default SIMD triangle blocks (octree_leaf_blocks.h), four
+// triangles per vector test; `simd=0` (and tri=mt) test the same lists one
+// triangle at a time. Neither uses a mailbox: a triangle listed in several
+// leaves the ray crosses is tested in each, which on Sponza and the stadium
+// cost less than the per-triangle lookups (docs/octrees.md), and it keeps
+// the scalar variant's counted work equal to the blocks'.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/mailbox.h"
+#include "accel/octree/octree_leaf_blocks.h"
 #include "accel/octree/octree_layouts.h"
 
 namespace raylab {
@@ -49,6 +57,8 @@ struct OctreeView {
   OctreeCube cube;
   const LeafTriangle* tris = nullptr;  // once per triangle, in the order the nodes first refer to them
   const uint32_t* ids = nullptr;       // node ranges of indices into tris
+  // SIMD node lists (simd=1, watertight): a node's first_ref is then its first block.
+  const OctTriangleBlock* blocks = nullptr;
   bool empty = true;
 };
 
@@ -138,14 +148,16 @@ struct OctChild {
   return n;
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Layout>
+// kBlocks: node lists are SIMD triangle blocks (watertight test only).
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, typename Layout>
 inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
   OctRay r;
   if (!oct_enter_root(tree.cube, ray, r)) return rec.hit();
-  const TrianglePrecompute<kTest> pre(ray);
-  RayMailbox mailbox;
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD lists run the watertight test");
+  using ListRay = std::conditional_t<kBlocks, BlockRay<kOctBlockWidth>, TrianglePrecompute<kTest>>;
+  const ListRay pre(ray);
 
   struct Entry {
     uint64_t handle;
@@ -163,13 +175,15 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
     rec.count_nodes(1);
     const OctNodeRec node = tree.layout.node(cur.handle, cur.level);
     const uint32_t count = node.meta >> 8;
-    // Exact assignment lists a large triangle in many leaves: the mailbox
-    // tests it once per ray (a miss stays a miss, a hit is already recorded).
-    const uint32_t* ids = tree.ids + node.first_ref;
-    for (uint32_t i = 0; i < count; ++i) {
-      if (mailbox.seen(ids[i])) continue;
-      if (intersect_leaf_triangle(pre, ray, tree.tris[ids[i]], rec)) {
-        if constexpr (kAnyHit) return rec.hit();
+    if (count) {
+      bool kept;
+      if constexpr (kBlocks)
+        kept = intersect_block_leaf<kOctBlockWidth>(tree.blocks + node.first_ref, oct_node_blocks(count), pre,
+                                                    ray.tmin, rec);
+      else
+        kept = intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + node.first_ref, count, rec);
+      if constexpr (kAnyHit) {
+        if (kept) return rec.hit();
       }
     }
     const float t_bound = rec.tmax() + r.delta_t;
