@@ -164,6 +164,8 @@ AcceleratorInfo octree_accelerator_info() {
       {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
        {"max_depth", "16", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)"},
        {"growth", "2", "assign=exact: no split whose children hold more than growth x the node's references, in [1, 8] (coplanar or touching faces would otherwise split to max_depth)"},
+       {"term", "count", "count (split any node above leaf, within growth) or sah (split only when the surface-area cost of the eight children beats the leaf)"},
+       {"ct", "1", "term=sah: cost of a node visit, in 4-wide triangle-block tests (0..100)"},
        {"assign", "exact", "exact (every leaf the triangle overlaps, SAT) or straddle (triangles crossing a "
                            "dividing plane stay at the inner node, each stored once)"},
        {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
@@ -182,6 +184,10 @@ AcceleratorInfo octree_accelerator_info() {
           throw SpecError(fmt::format("octree: max_depth must be in 0..{}", kOctMaxLevel));
         opt.build.max_growth = p.real("growth");
         if (!(opt.build.max_growth >= 1.0 && opt.build.max_growth <= 8.0)) throw SpecError("octree: growth must be in [1, 8]");
+        opt.build.sah = p.choice("term", {"count", "sah"}) == "sah";
+        opt.build.ct = p.real("ct");
+        if (!(opt.build.ct >= 0.0 && opt.build.ct <= 100.0)) throw SpecError("octree: ct must be in [0, 100]");
+        if (p.given("ct") && !opt.build.sah) throw SpecError("octree: ct applies to term=sah only");
         opt.build.assign = p.choice("assign", {"exact", "straddle"}) == "straddle" ? OctreeAssign::Straddle
                                                                                    : OctreeAssign::Exact;
         const std::string& storage = p.choice("storage", {"pointer", "linear", "hash"});
