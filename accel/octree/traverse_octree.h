@@ -260,16 +260,21 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
       OctChild kids[8];
       const int n = octree_child_order(cur.t0, cur.t1 < t_bound ? cur.t1 : t_bound, near_end, far_start, r.neg_mask,
                                        mask, kids);
-      for (int i = n - 1; i >= 0; --i) {
-        const uint32_t c = kids[i].c;
-        Entry& e = stack[sp++];
-        e.handle = tree.layout.child(cur.handle, node, c);
-        e.lattice[0] = cur.lattice[0] + ((c & 1u) ? half : 0u);
-        e.lattice[1] = cur.lattice[1] + ((c & 2u) ? half : 0u);
-        e.lattice[2] = cur.lattice[2] + ((c & 4u) ? half : 0u);
-        e.level = cur.level + 1;
-        e.t0 = kids[i].t0;
-        e.t1 = kids[i].t1;
+      auto entry = [&](const OctChild& k) {
+        const uint32_t c = k.c;
+        return Entry{tree.layout.child(cur.handle, node, c),
+                     {cur.lattice[0] + ((c & 1u) ? half : 0u), cur.lattice[1] + ((c & 2u) ? half : 0u),
+                      cur.lattice[2] + ((c & 4u) ? half : 0u)},
+                     cur.level + 1,
+                     k.t0,
+                     k.t1};
+      };
+      for (int i = n - 1; i >= 1; --i) stack[sp++] = entry(kids[i]);
+      // The nearest child is entered at once (its entry is <= t_bound, as
+      // the order was computed on [t0, min(t1, t_bound)]): no stack round trip.
+      if (n > 0) {
+        cur = entry(kids[0]);
+        continue;
       }
     }
     // Next node that can still hold a closer hit.
