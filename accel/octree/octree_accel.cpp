@@ -186,7 +186,7 @@ AcceleratorInfo octree_accelerator_info() {
                 {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
                 {"hash_layout_bytes", "node memory of storage=hash for this tree"}};
   // Bench's memory estimate: about twice the final 51-119 bytes/tri on stadium and sponza (not measured at 10^7).
-  info.build_peak_bytes_per_triangle = 300;
+  info.build_peak_bytes_per_triangle = 300;  // measured 239 on soup:n=10^7
   return info;
 }
 
