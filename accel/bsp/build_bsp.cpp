@@ -11,6 +11,7 @@
 
 #include "accel/bsp/convex_polytope.h"
 #include "accel/core/sah_report.h"
+#include "accel/kdtree/clip_triangle.h"  // kd_detail::next_down / next_up
 
 namespace raylab {
 
@@ -103,6 +104,16 @@ struct Region {
   }
 };
 
+// Rounds a double to a float no larger (down) or no smaller (up) than it.
+inline float float_down(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? kd_detail::next_down(f) : f;
+}
+inline float float_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? kd_detail::next_up(f) : f;
+}
+
 // A plane direction u with two unit vectors v, w orthogonal to it and each
 // other: the region's extents along the three give the box in that frame
 // whose closed-form areas estimate the child areas (exact for a box region
@@ -138,32 +149,35 @@ struct AreaEstimate {
     inv_total = total > 0 ? 1.0 / total : 0.0;
   }
   double below(double p) const { return (cross + (p - lo) * perimeter) * inv_total; }
+  // Whether a plane at float position p cuts the region. The region's
+  // extent is rounded inward to float first: vertices made by an earlier
+  // plane lie on it only up to double rounding, and without this the same
+  // float plane could cut off a sliver of empty space again and again (each
+  // time earning the empty-space bonus) until the depth limit.
+  bool cuts(float p) const { return p > float_up(lo) && p < float_down(hi); }
   double above(double p) const { return (cross + (hi - p) * perimeter) * inv_total; }
 };
 
-// Rounds a double to a float no larger (down) or no smaller (up) than it.
-inline float float_down(double x) {
-  float f = static_cast<float>(x);
-  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-}
-inline float float_up(double x) {
-  float f = static_cast<float>(x);
-  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
-
 // Sweep events along one direction, in the k-d tree's order at equal
-// positions (Wald & Havran 2006): ends, then planar, then starts.
-constexpr uint8_t kEnd = 0, kPlanar = 1, kStart = 2;
-struct Event {
-  float pos;
-  uint8_t type;
-  bool operator<(const Event& o) const { return pos < o.pos || (pos == o.pos && type < o.type); }
-};
+// positions (Wald & Havran 2006): ends, then planar, then starts. An event
+// is one integer (the float's bits mapped to an order-preserving unsigned
+// key, then the type), so sorting compares integers.
+constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
+inline uint64_t make_event(float pos, uint32_t type) {
+  const uint32_t b = std::bit_cast<uint32_t>(pos == 0.0f ? 0.0f : pos);  // -0 sorts as +0
+  const uint32_t key = (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+  return (static_cast<uint64_t>(key) << 2) | type;
+}
+inline float event_pos(uint64_t e) {
+  const uint32_t key = static_cast<uint32_t>(e >> 2);
+  return std::bit_cast<float>((key & 0x80000000u) ? (key & 0x7fffffffu) : ~key);
+}
+inline uint32_t event_type(uint64_t e) { return static_cast<uint32_t>(e & 3u); }
 
 // Per-thread working memory of find_split (no task switch happens inside).
 struct Scratch {
-  std::vector<Event> events;
-  std::vector<double> lo_s, hi_s;
+  std::vector<uint64_t> events;
+  std::vector<double> lo_s, hi_s;  // per direction and reference: projected extent
   std::vector<uint32_t> hist_min, hist_max;
   std::vector<Vec3d> corners;
 };
@@ -336,59 +350,75 @@ class Builder {
     s.estimated[i] = c;
   }
 
+  // Projected extents of every reference along the first `dirs` fixed
+  // directions, in one pass over the clipped polygons:
+  // sc.lo_s[di * n + i], sc.hi_s[di * n + i].
+  void project(Scratch& sc, const RefSet& refs, int dirs) const {
+    const size_t n = refs.size();
+    sc.lo_s.resize(dirs * n);
+    sc.hi_s.resize(dirs * n);
+    for (size_t i = 0; i < n; ++i) {
+      double lo[13], hi[13];
+      std::fill(lo, lo + dirs, std::numeric_limits<double>::infinity());
+      std::fill(hi, hi + dirs, -std::numeric_limits<double>::infinity());
+      for (uint32_t k = refs.start[i]; k < refs.start[i + 1]; ++k) {
+        const Vec3d& p = refs.pts[k];
+        for (int di = 0; di < dirs; ++di) {
+          const double x = frames_[di].u.dot(p);
+          lo[di] = std::min(lo[di], x);
+          hi[di] = std::max(hi[di], x);
+        }
+      }
+      for (int di = 0; di < dirs; ++di) sc.lo_s[di * n + i] = lo[di], sc.hi_s[di * n + i] = hi[di];
+    }
+  }
+
   // Exact sweep over one direction's sorted events (Wald & Havran 2006 with
   // the BSP side rule: a reference lying in the plane goes below).
-  void sweep_direction(Search& s, Scratch& sc, const RefSet& refs, int di, const AreaEstimate& est,
-                       bool is_exact) const {
-    const Frame& f = frames_[di];
+  void sweep_direction(Search& s, Scratch& sc, size_t n, int di, const AreaEstimate& est, bool is_exact) const {
     const Vec3f uf = bsp_fixed_directions()[di];
     const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
-    const size_t n = refs.size();
-    std::vector<Event>& ev = sc.events;
+    std::vector<uint64_t>& ev = sc.events;
     ev.clear();
+    const double* lo_s = sc.lo_s.data() + di * n;
+    const double* hi_s = sc.hi_s.data() + di * n;
     for (size_t i = 0; i < n; ++i) {
-      double lo, hi;
-      side_range(refs, i, f.u, 0.0, lo, hi);
       // Outward to float, so that a plane at an event's position has the
       // reference exactly on the side the sweep counts it.
-      const float flo = float_down(lo), fhi = float_up(hi);
+      const float flo = float_down(lo_s[i]), fhi = float_up(hi_s[i]);
       if (flo == fhi) {
-        ev.push_back(Event{flo, kPlanar});
+        ev.push_back(make_event(flo, kPlanar));
       } else {
-        ev.push_back(Event{flo, kStart});
-        ev.push_back(Event{fhi, kEnd});
+        ev.push_back(make_event(flo, kStart));
+        ev.push_back(make_event(fhi, kEnd));
       }
     }
     std::sort(ev.begin(), ev.end());
     size_t nl = 0, nr = n;
     for (size_t i = 0; i < ev.size();) {
-      const float p = ev[i].pos;
-      size_t ending = 0, planar = 0, starting = 0;
-      while (i < ev.size() && ev[i].pos == p && ev[i].type == kEnd) ++ending, ++i;
-      while (i < ev.size() && ev[i].pos == p && ev[i].type == kPlanar) ++planar, ++i;
-      while (i < ev.size() && ev[i].pos == p && ev[i].type == kStart) ++starting, ++i;
-      nr -= planar + ending;
-      nl += planar;
+      const uint64_t group = ev[i] >> 2;
+      const float p = event_pos(ev[i]);
+      size_t count[3] = {0, 0, 0};
+      for (; i < ev.size() && (ev[i] >> 2) == group; ++i) ++count[event_type(ev[i])];
+      nr -= count[kPlanar] + count[kEnd];
+      nl += count[kPlanar];
       // Only planes strictly inside the region cut it.
-      if (p > est.lo && p < est.hi) offer(s, is_exact, kind, uf, p, nl, nr, est.below(p), est.above(p));
-      nl += starting;
+      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, nl, nr, est.below(p), est.above(p));
+      nl += count[kStart];
     }
   }
 
   // The old binned search (`bins` >= 2): bins - 1 planes over the extent.
-  void bin_direction(Search& s, Scratch& sc, const RefSet& refs, int di, const AreaEstimate& est,
-                     bool is_exact) const {
-    const Frame& f = frames_[di];
+  void bin_direction(Search& s, Scratch& sc, size_t n, int di, const AreaEstimate& est, bool is_exact) const {
     const Vec3f uf = bsp_fixed_directions()[di];
     const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
-    const size_t n = refs.size();
     const int bins = opt_.bins;
-    sc.lo_s.resize(n), sc.hi_s.resize(n);
+    const double* lo_s = sc.lo_s.data() + di * n;
+    const double* hi_s = sc.hi_s.data() + di * n;
     double tri_lo = std::numeric_limits<double>::infinity(), tri_hi = -tri_lo;
     for (size_t i = 0; i < n; ++i) {
-      side_range(refs, i, f.u, 0.0, sc.lo_s[i], sc.hi_s[i]);
-      tri_lo = std::min(tri_lo, sc.lo_s[i]);
-      tri_hi = std::max(tri_hi, sc.hi_s[i]);
+      tri_lo = std::min(tri_lo, lo_s[i]);
+      tri_hi = std::max(tri_hi, hi_s[i]);
     }
     const double lo = std::max(est.lo, tri_lo), hi = std::min(est.hi, tri_hi);
     if (!(hi > lo)) return;
@@ -397,15 +427,15 @@ class Builder {
     const double scale = bins / (hi - lo);
     auto bin_of = [&](double x) { return std::clamp(static_cast<int>((x - lo) * scale), 0, bins - 1); };
     for (size_t i = 0; i < n; ++i) {
-      sc.hist_min[bin_of(sc.lo_s[i])]++;
-      sc.hist_max[bin_of(sc.hi_s[i])]++;
+      sc.hist_min[bin_of(lo_s[i])]++;
+      sc.hist_max[bin_of(hi_s[i])]++;
     }
     size_t below = 0, above = n;
     for (int b = 1; b < bins; ++b) {
       below += sc.hist_min[b - 1];
       above -= sc.hist_max[b - 1];
       const float p = static_cast<float>(lo + (hi - lo) * b / bins);
-      if (p > est.lo && p < est.hi) offer(s, is_exact, kind, uf, p, below, above, est.below(p), est.above(p));
+      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, below, above, est.below(p), est.above(p));
     }
   }
 
@@ -422,7 +452,7 @@ class Builder {
       const float df = static_cast<float>(nf.cast<double>().dot(v_[id][0]));
       const Vec3d nn = nf.cast<double>();
       const AreaEstimate est(sc.corners, frame_of(nn));
-      if (!(df > est.lo && df < est.hi)) continue;
+      if (!est.cuts(df)) continue;
       size_t nl = 0, nr = 0;
       for (size_t j = 0; j < n; ++j) {
         double smin, smax;
@@ -447,12 +477,13 @@ class Builder {
     s.ct = opt_.traversal_cost;
     s.lambda_empty = 1.0 - static_cast<double>(opt_.empty_bonus);
     region.corners(sc.corners);
+    project(sc, refs, opt_.directions);
     for (int di = 0; di < opt_.directions; ++di) {
       const AreaEstimate est(sc.corners, frames_[di]);
       if (!(est.hi > est.lo)) continue;  // flat along this direction
       const bool is_exact = region.is_box && di < 3;
-      if (opt_.bins >= 2) bin_direction(s, sc, refs, di, est, is_exact);
-      else sweep_direction(s, sc, refs, di, est, is_exact);
+      if (opt_.bins >= 2) bin_direction(s, sc, s.n, di, est, is_exact);
+      else sweep_direction(s, sc, s.n, di, est, is_exact);
     }
     triangle_planes(s, sc, refs);
     const double ci = opt_.intersection_cost;
