@@ -217,7 +217,7 @@ AcceleratorInfo octree_accelerator_info() {
                 {"hash_layout_bytes", "node memory of storage=hash for this tree"},
                 {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}};
   // Bench's memory estimate: about twice the final 51-119 bytes/tri on stadium and sponza (not measured at 10^7).
-  info.build_peak_bytes_per_triangle = 300;
+  info.build_peak_bytes_per_triangle = 300;  // measured 239 on soup:n=10^7
   return info;
 }
 
