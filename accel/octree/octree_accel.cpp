@@ -216,8 +216,9 @@ AcceleratorInfo octree_accelerator_info() {
                 {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
                 {"hash_layout_bytes", "node memory of storage=hash for this tree"},
                 {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}};
-  // Bench's memory estimate: about twice the final 51-119 bytes/tri on stadium and sponza (not measured at 10^7).
-  info.build_peak_bytes_per_triangle = 300;  // measured 239 on soup:n=10^7
+  // Bench's memory estimate: peak RSS growth measured 239 B/tri on soup:n=10^7 (term=count, before the
+  // SIMD lists) and 266 on soup:n=10^6 with the SIMD lists and term=sah (term=count: 514).
+  info.build_peak_bytes_per_triangle = 300;
   return info;
 }
 
