@@ -63,9 +63,76 @@ class IrgridBuilder {
 
   Irgrid& g_;
   const IrgridOptions& opt_;
+  // The cell owning virtual voxel v, in the binary octrees.
+  uint32_t tree_cell_at(const int32_t v[3]) const;
+  // The walk's voxel map (irgrid.h) from the binary octrees.
+  void flatten_voxel_map();
+  int subtree_height(uint32_t entry);
+  uint32_t flatten(uint32_t entry);
+
   std::vector<BuildCell> cells_;
+  // The voxel map while building: per top cell a binary octree, entries as
+  // in irgrid.h with one level per block (blocks of 8).
+  std::vector<uint32_t> tree_top_, tree_nodes_;
+  std::vector<int8_t> block_height_;  // per block of tree_nodes_, -1 = not computed
   int deepest_ = 0;
 };
+
+uint32_t IrgridBuilder::tree_cell_at(const int32_t v[3]) const {
+  uint32_t e = tree_top_[g_.top.index(v[0] >> g_.depth, v[1] >> g_.depth, v[2] >> g_.depth)];
+  for (int bit = g_.depth - 1; e & kIrgridInnerNode; --bit) {
+    const uint32_t child = ((v[0] >> bit) & 1) | (((v[1] >> bit) & 1) << 1) | (((v[2] >> bit) & 1) << 2);
+    e = tree_nodes_[(e & ~kIrgridInnerNode) + child];
+  }
+  return e;
+}
+
+int IrgridBuilder::subtree_height(uint32_t entry) {
+  if (!(entry & kIrgridInnerNode)) return 0;
+  const uint32_t block = entry & ~kIrgridInnerNode;
+  int8_t& h = block_height_[block / 8];
+  if (h < 0) {
+    int most = 0;
+    for (uint32_t c = 0; c < 8; ++c) most = std::max(most, subtree_height(tree_nodes_[block + c]));
+    h = static_cast<int8_t>(1 + most);
+  }
+  return h;
+}
+
+// An inner node of the binary octree becomes one block of (2^k)^3 entries
+// covering k levels at once, k = min(3, the height of its subtree): the
+// walk's lookup then makes a third of the dependent loads of a binary
+// descent, and a shallow subtree costs no more entries than before.
+uint32_t IrgridBuilder::flatten(uint32_t entry) {
+  if (!(entry & kIrgridInnerNode)) return entry;
+  const int k = std::min(kIrgridMaxLevelsPerBlock, subtree_height(entry));
+  const uint32_t side = 1u << k;
+  const size_t base = g_.nodes.size();
+  if (base + (size_t{1} << (3 * k)) > kIrgridBlockMask)
+    throw std::length_error("irgrid: voxel map larger than 2^29 entries");
+  g_.nodes.resize(base + (size_t{1} << (3 * k)));
+  for (uint32_t z = 0; z < side; ++z)
+    for (uint32_t y = 0; y < side; ++y)
+      for (uint32_t x = 0; x < side; ++x) {
+        uint32_t e = entry;
+        int level = k - 1;
+        for (; level >= 0 && (e & kIrgridInnerNode); --level) {
+          const uint32_t child = ((x >> level) & 1) | (((y >> level) & 1) << 1) | (((z >> level) & 1) << 2);
+          e = tree_nodes_[(e & ~kIrgridInnerNode) + child];
+        }
+        const uint32_t flat = (e & kIrgridInnerNode) ? flatten(e) : e;
+        g_.nodes[base + x + (y << k) + (z << (2 * k))] = flat;
+      }
+  return kIrgridInnerNode | (static_cast<uint32_t>(k) << kIrgridLevelsShift) | static_cast<uint32_t>(base);
+}
+
+void IrgridBuilder::flatten_voxel_map() {
+  block_height_.assign(tree_nodes_.size() / 8 + 1, -1);
+  g_.top_nodes.resize(tree_top_.size());
+  for (size_t t = 0; t < tree_top_.size(); ++t) g_.top_nodes[t] = flatten(tree_top_[t]);
+  std::vector<uint32_t>().swap(tree_nodes_);
+  std::vector<uint32_t>().swap(tree_top_);
+}
 
 template <typename F>
 void IrgridBuilder::descend(uint32_t& entry, const int32_t node_lo[3], int level, const int32_t lo[3],
@@ -83,7 +150,7 @@ void IrgridBuilder::descend(uint32_t& entry, const int32_t node_lo[3], int level
       child_lo[k] = node_lo[k] + (((c >> k) & 1) ? half : 0);
       overlaps &= child_lo[k] < hi[k] && child_lo[k] + half > lo[k];
     }
-    if (overlaps) descend(g_.nodes[block + c], child_lo, level + 1, lo, hi, f);
+    if (overlaps) descend(tree_nodes_[block + c], child_lo, level + 1, lo, hi, f);
   }
 }
 
@@ -95,7 +162,7 @@ void IrgridBuilder::for_each_leaf(const int32_t lo[3], const int32_t hi[3], F&& 
     for (t[1] = lo[1] >> D; t[1] <= (hi[1] - 1) >> D; ++t[1])
       for (t[0] = lo[0] >> D; t[0] <= (hi[0] - 1) >> D; ++t[0]) {
         const int32_t node_lo[3] = {t[0] << D, t[1] << D, t[2] << D};
-        descend(g_.top_nodes[g_.top.index(t[0], t[1], t[2])], node_lo, 0, lo, hi, f);
+        descend(tree_top_[g_.top.index(t[0], t[1], t[2])], node_lo, 0, lo, hi, f);
       }
 }
 
@@ -210,14 +277,14 @@ void IrgridBuilder::subdivide_top_cells(const std::vector<uint32_t>& top_offsets
   if (cells >= kIrgridInnerNode || nodes >= kIrgridInnerNode)
     throw std::length_error("irgrid: more than 2^31 cells or octree entries");
   cells_.reserve(cells);
-  g_.nodes.reserve(nodes);
-  g_.top_nodes.resize(top_cells);
+  tree_nodes_.reserve(nodes);
+  tree_top_.resize(top_cells);
   for (size_t t = 0; t < top_cells; ++t) {
     LocalTree& tree = trees[t];
-    const uint32_t cell_base = static_cast<uint32_t>(cells_.size()), node_base = static_cast<uint32_t>(g_.nodes.size());
+    const uint32_t cell_base = static_cast<uint32_t>(cells_.size()), node_base = static_cast<uint32_t>(tree_nodes_.size());
     auto global = [&](uint32_t e) { return (e & kIrgridInnerNode) ? e + node_base : e + cell_base; };
-    g_.top_nodes[t] = global(tree.root);
-    for (const uint32_t e : tree.nodes) g_.nodes.push_back(global(e));
+    tree_top_[t] = global(tree.root);
+    for (const uint32_t e : tree.nodes) tree_nodes_.push_back(global(e));
     for (BuildCell& c : tree.cells) {
       deepest_ = std::max(deepest_, c.level);
       cells_.push_back(std::move(c));
@@ -245,7 +312,7 @@ size_t IrgridBuilder::merge_cells() {
         if (!A.alive || touched[i] || A.hi[a] >= g_.virt.res[a]) continue;
         int32_t v[3] = {A.lo[0], A.lo[1], A.lo[2]};
         v[a] = A.hi[a];
-        const uint32_t j = g_.cell_at(v);
+        const uint32_t j = tree_cell_at(v);
         BuildCell& B = cells_[j];
         if (touched[j] || B.lo[a] != A.hi[a] || B.lo[b] != A.lo[b] || B.hi[b] != A.hi[b] || B.lo[c] != A.lo[c] ||
             B.hi[c] != A.hi[c])
@@ -350,8 +417,9 @@ void IrgridBuilder::finish(BuildStats& stats) {
   auto renumber = [&](uint32_t& e) {
     if (!(e & kIrgridInnerNode)) e = new_id[e];
   };
-  for (uint32_t& e : g_.top_nodes) renumber(e);
-  for (uint32_t& e : g_.nodes) renumber(e);
+  for (uint32_t& e : tree_top_) renumber(e);
+  for (uint32_t& e : tree_nodes_) renumber(e);
+  flatten_voxel_map();
   add_occupancy_stats(stats, g_.cells.size(), nonempty, refs, max_per_cell, g_.tris.size());
 }
 

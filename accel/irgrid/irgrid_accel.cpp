@@ -92,7 +92,12 @@ AcceleratorInfo irgrid_accelerator_info() {
                 {"merged_pairs", "merges made by the merge pass"},
                 {"expanded_cells", "cells whose box the expand pass grew"},
                 {"depth", "deepest octree level used below the top grid"},
-                {"max_tris_per_cell", "longest cell list"}};
+                {"max_tris_per_cell", "longest cell list"},
+                {"mean_tris_per_nonempty_cell", "mean list length of the non-empty cells"},
+                {"empty_fraction", "fraction of the cells that are empty"},
+                {"top_x", "top grid resolution along x"},
+                {"top_y", "top grid resolution along y"},
+                {"top_z", "top grid resolution along z"}};
   info.build_peak_bytes_per_triangle = 400;
   return info;
 }
