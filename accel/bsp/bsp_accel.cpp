@@ -51,7 +51,8 @@ class BspAccel final : public BatchAccelerator<BspAccel> {
       ids_[i] = slot[id];
     }
     tris_ = copy_leaf_triangles(mesh, first_use);
-    view_ = BspView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0};
+    view_ = BspView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
+                    bsp_fixed_directions(), opt_.directions};
 
     BuildStats s;
     const double n = static_cast<double>(mesh.num_triangles());
