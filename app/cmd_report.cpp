@@ -286,13 +286,10 @@ void memory_and_build(Doc& doc, const std::vector<json>& recs) {
            "break-even: how many rays (of the first ray set, one thread) a structure must trace before its build plus "
            "trace time is below Embree's, on the largest scene (a model from the measured build time and speed, "
            "t = build + rays / speed, not a measurement).");
-  BarChart mem, build;
-  mem.id = "chart-memory";
-  mem.title = "Memory: bytes per triangle";
-  mem.x_label = "bytes per triangle (geometric mean over scenes)";
-  build.id = "chart-build";
-  build.title = "Build time per triangle";
-  build.x_label = "ns per triangle (median build, geometric mean over scenes)";
+  BarChart mem{.id = "chart-memory", .title = "Memory: bytes per triangle",
+               .x_label = "bytes per triangle (geometric mean over scenes)"};
+  BarChart build{.id = "chart-build", .title = "Build time per triangle",
+                 .x_label = "ns per triangle (median build, geometric mean over scenes)"};
   // The largest scene and the first ray set, for the break-even.
   std::string largest;
   double most = -1;
@@ -439,13 +436,8 @@ void why(Doc& doc, const std::vector<json>& recs) {
     tris[a].push_back(num(r, "tris_per_ray"));
     ns[a].push_back(1e3 / num(r, "mrays_per_s"));
   }
-  BarChart cn, ct;
-  cn.id = "chart-nodes-per-ray";
-  cn.title = "Nodes or cells visited per ray";
-  cn.x_label = "per ray (geometric mean)";
-  ct.id = "chart-tris-per-ray";
-  ct.title = "Triangle tests per ray";
-  ct.x_label = "per ray (geometric mean)";
+  BarChart cn{.id = "chart-nodes-per-ray", .title = "Nodes or cells visited per ray", .x_label = "per ray (geometric mean)"};
+  BarChart ct{.id = "chart-tris-per-ray", .title = "Triangle tests per ray", .x_label = "per ray (geometric mean)"};
   std::vector<std::vector<std::string>> table;
   for (const auto& a : accels) {
     const double n = geomean(nodes[a]), t = geomean(tris[a]), time = geomean(ns[a]);

@@ -84,4 +84,8 @@ inline Hit traverse_loose_octree(const LooseOctreeView& tree, const Ray& ray, Tr
   }
 }
 
+// The walk under the name the generic shell calls (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_view(const LooseOctreeView& v, const Ray& ray, TraversalStats* stats) { return traverse_loose_octree<kTest, kAnyHit, kCount>(v, ray, stats); }
+
 }  // namespace raylab

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
-#include "accel/core/batch_accelerator.h"
+#include "accel/core/view_accelerator.h"
+#include "accel/core/tree_stats.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/octree/build_octree.h"
 #include "accel/octree/traverse_octree.h"
@@ -18,14 +20,13 @@ struct OctreeOptions {
 };
 
 template <typename Layout>
-class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
- public:
-  OctreeAccel(const OctreeOptions& opt, TriangleTest test) : BatchAccelerator<OctreeAccel<Layout>>(test), opt_(opt) {}
+class OctreeAccel final : public ViewAccelerator<OctreeAccel<Layout>, OctreeOptions, OctreeView<Layout>> {
+  using Shell = ViewAccelerator<OctreeAccel<Layout>, OctreeOptions, OctreeView<Layout>>;
+  using Shell::opt_;
+  using Shell::view_;
 
-  template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_octree<kTest, kAnyHit, kCount>(view_, ray, stats);
-  }
+ public:
+  using Shell::Shell;
 
   // raylab show: node cubes down to max_depth (leaves drawn as leaves).
   void outline(int max_depth, StructureOutline& out) const override {
@@ -66,18 +67,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
     const OctreeShape shape = measure_octree(tree);
     // Each referenced triangle copied once, in first-use order, nodes keep
     // indices into that copy (as the k-d tree does).
-    std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
-    std::vector<uint32_t> first_use;
-    ids_.resize(tree.refs.size());
-    for (size_t i = 0; i < tree.refs.size(); ++i) {
-      const uint32_t id = tree.refs[i];
-      if (slot[id] == UINT32_MAX) {
-        slot[id] = static_cast<uint32_t>(first_use.size());
-        first_use.push_back(id);
-      }
-      ids_[i] = slot[id];
-    }
-    tris_ = copy_leaf_triangles(mesh, first_use);
+    IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.refs);
+    tris_ = std::move(leaf_tris.tris);
+    ids_ = std::move(leaf_tris.ids);
     const size_t shared_bytes = tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t);
     const size_t hash_entries = std::max<size_t>(shape.nonempty_nodes, 1);
     const size_t pointer_bytes = tree.nodes.size() * sizeof(OctreeNode);
@@ -103,20 +95,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
     view_.ids = ids_.data();
     view_.empty = mesh.num_triangles() == 0;
 
-    BuildStats s;
-    const double n = static_cast<double>(mesh.num_triangles());
-    s.nodes = shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
-    s.sah_cost = shape.sah_cost;
+    BuildStats s = tree_build_stats(shape, mesh.num_triangles());
     s.bytes = layout_bytes + shared_bytes;
-    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
-    s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
-    s.extra["references"] = static_cast<double>(shape.references);
-    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
     s.extra["inner_references"] = static_cast<double>(shape.inner_references);
-    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
     s.extra["nonempty_nodes"] = static_cast<double>(shape.nonempty_nodes);
     s.extra["pointer_layout_bytes"] = static_cast<double>(pointer_bytes);
     s.extra["linear_layout_bytes"] = linear_bytes;
@@ -125,20 +106,18 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
   }
 
  private:
-  OctreeOptions opt_;
   std::vector<OctreeNode> nodes_;
   std::vector<OctLinearSlot> slots_;
   std::vector<OctHashEntry> table_;
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
-  OctreeView<Layout> view_;
   Aabb bounds_;
 };
 
 }  // namespace
 
 AcceleratorInfo octree_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "octree",
       "regular octree over the bounding cube, exact SAT assignment, parametric traversal (Revelles et al. 2000)",
       {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
@@ -148,8 +127,7 @@ AcceleratorInfo octree_accelerator_info() {
                            "dividing plane stay at the inner node, each stored once)"},
        {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
                               "children by index arithmetic) or hash (Morton location codes, occupied nodes only)"},
-       {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB"},
-       triangle_test_param()},
+       {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         OctreeOptions opt;
         const int leaf = p.integer("leaf");
@@ -171,20 +149,15 @@ AcceleratorInfo octree_accelerator_info() {
         if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
         if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
         return std::make_unique<OctreeAccel<OctPointerLayout>>(opt, test);
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
+      });
   info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash"};
-  info.stats = {{"inner_nodes", "inner nodes"},
-                {"empty_leaves", "leaves without triangles"},
-                {"references", "triangle references in all nodes"},
-                {"refs_per_triangle", "references per triangle (exact assignment duplicates straddling triangles)"},
-                {"inner_references", "references held by inner nodes (assign=straddle)"},
-                {"max_leaf_size", "largest leaf, in triangles"},
-                {"nonempty_nodes", "nodes with triangles in their subtree (the hashed layout's entries)"},
-                {"pointer_layout_bytes", "node memory of storage=pointer for this tree"},
-                {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
-                {"hash_layout_bytes", "node memory of storage=hash for this tree"}};
+  info.stats = tree_stat_infos(
+      "triangle references in all nodes", "references per triangle (exact assignment duplicates straddling triangles)",
+      {{"inner_references", "references held by inner nodes (assign=straddle)"},
+       {"nonempty_nodes", "nodes with triangles in their subtree (the hashed layout's entries)"},
+       {"pointer_layout_bytes", "node memory of storage=pointer for this tree"},
+       {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
+       {"hash_layout_bytes", "node memory of storage=hash for this tree"}});
   // Bench's memory estimate: about twice the final 51-119 bytes/tri on stadium and sponza (not measured at 10^7).
   info.build_peak_bytes_per_triangle = 300;
   return info;

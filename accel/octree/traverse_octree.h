@@ -210,4 +210,8 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
   }
 }
 
+// The walk under the name the generic shell calls (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Layout>
+inline Hit traverse_view(const OctreeView<Layout>& v, const Ray& ray, TraversalStats* stats) { return traverse_octree<kTest, kAnyHit, kCount>(v, ray, stats); }
+
 }  // namespace raylab
