@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "accel/core/view_accelerator.h"
+#include "accel/core/batch_accelerator.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
@@ -13,9 +13,18 @@ namespace raylab {
 
 namespace {
 
-class LooseOctreeAccel final : public ViewAccelerator<LooseOctreeAccel, LooseOctreeOptions, LooseOctreeView> {
+class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
  public:
-  using ViewAccelerator::ViewAccelerator;
+  LooseOctreeAccel(const LooseOctreeOptions& opt, TriangleTest test, bool simd)
+      : BatchAccelerator(test), opt_(opt), blocks_wanted_(simd && test == TriangleTest::Watertight) {}
+
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats) const {
+    if constexpr (kTest == TriangleTest::Watertight) {
+      if (view_.blocks) return traverse_loose_octree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
+    }
+    return traverse_loose_octree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+  }
 
   // raylab show: the loose boxes of the nodes down to max_depth.
   void outline(int max_depth, StructureOutline& out) const override {
@@ -53,23 +62,36 @@ class LooseOctreeAccel final : public ViewAccelerator<LooseOctreeAccel, LooseOct
     LooseBoxes boxes;
     OctreeTree tree = build_loose_octree(mesh, opt_, boxes);
     const OctreeShape shape = measure_octree(tree);
+    blocks_.clear();
+    tris_.clear();
+    if (blocks_wanted_) {
+      blocks_ = make_octree_blocks(mesh, tree);  // rewrites first_ref to block indices
+    } else {
+      // One reference per triangle: the triangles themselves in node order.
+      tris_ = copy_leaf_triangles(mesh, tree.refs);
+    }
     nodes_ = std::move(tree.nodes);
-    // One reference per triangle: the triangles themselves in node order.
-    tris_ = copy_leaf_triangles(mesh, tree.refs);
-    view_ = LooseOctreeView{nodes_.data(), boxes, tris_.data(), mesh.num_triangles() == 0};
+    view_ = LooseOctreeView{nodes_.data(), boxes, tris_.data(), mesh.num_triangles() == 0,
+                            blocks_wanted_ ? blocks_.data() : nullptr};
 
     BuildStats s = tree_build_stats(shape, mesh.num_triangles());
     // The octree's SAH is measured on the cubes; loose boxes overlap, so it is not reported.
     s.sah_cost = std::numeric_limits<double>::quiet_NaN();
-    s.bytes = nodes_.size() * sizeof(OctreeNode) + tris_.size() * sizeof(LeafTriangle);
+    s.bytes = nodes_.size() * sizeof(OctreeNode) + tris_.size() * sizeof(LeafTriangle) +
+              blocks_.size() * sizeof(OctTriangleBlock);
+    s.extra["list_blocks"] = static_cast<double>(blocks_.size());
     s.extra["inner_references"] = static_cast<double>(shape.inner_references);
     s.extra["looseness"] = opt_.looseness;
     return s;
   }
 
  private:
+  LooseOctreeOptions opt_;
   std::vector<OctreeNode> nodes_;
   std::vector<LeafTriangle> tris_;
+  bool blocks_wanted_;
+  std::vector<OctTriangleBlock> blocks_;
+  LooseOctreeView view_;
   Aabb bounds_;
 };
 
@@ -82,7 +104,8 @@ AcceleratorInfo loose_octree_accelerator_info() {
       "children walked by entry distance",
       {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)"},
        {"leaf", "4", "a node with at most this many triangles keeps them (1..1000)"},
-       {"max_depth", "20", "depth limit, root = 0 (0..20)"}},
+       {"max_depth", "20", "depth limit, root = 0 (0..20)"},
+       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         LooseOctreeOptions opt;
         opt.looseness = p.real("k");
@@ -93,12 +116,16 @@ AcceleratorInfo loose_octree_accelerator_info() {
         opt.max_depth = p.integer("max_depth");
         if (opt.max_depth < 0 || opt.max_depth > kOctMaxLevel)
           throw SpecError(fmt::format("loose_octree: max_depth must be in 0..{}", kOctMaxLevel));
-        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p));
+        const bool simd = p.boolean("simd");
+        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), simd);
       });
-  info.cover = {"loose_octree:k=1.25"};
+  info.caps.scalar_variant = "simd=0";
+  info.cover = {"loose_octree:k=1.25", "loose_octree:simd=0"};
   info.stats = tree_stat_infos("triangle references (= triangles: each stored once)",
                                "references per triangle (1 by construction)",
-                               {{"inner_references", "triangles held by inner nodes"}, {"looseness", "k in force"}});
+                               {{"inner_references", "triangles held by inner nodes"},
+                                {"looseness", "k in force"},
+                                {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}});
   // Bench's memory estimate: about twice the final 49-50 bytes/tri on sponza and stadium (not measured at 10^7).
   info.build_peak_bytes_per_triangle = 120;
   return info;
