@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/kdtree/build_sah_events.h"
@@ -22,14 +23,13 @@ enum class KdBuilder { Sah, Median };
 class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
   KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd)
-      : BatchAccelerator(test), builder_(builder), opt_(opt), blocks_wanted_(simd && test == TriangleTest::Watertight) {}
+      : BatchAccelerator(test), builder_(builder), opt_(opt), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (view_.blocks) return traverse_kdtree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
-    }
-    return traverse_kdtree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+    return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+    });
   }
   void outline(int max_depth, StructureOutline& out) const override {
     outline_kdtree(view_.bounds, nodes_, max_depth, out);

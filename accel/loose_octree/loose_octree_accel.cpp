@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
@@ -16,14 +17,13 @@ namespace {
 class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
  public:
   LooseOctreeAccel(const LooseOctreeOptions& opt, TriangleTest test, bool simd)
-      : BatchAccelerator(test), opt_(opt), blocks_wanted_(simd && test == TriangleTest::Watertight) {}
+      : BatchAccelerator(test), opt_(opt), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (view_.blocks) return traverse_loose_octree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
-    }
-    return traverse_loose_octree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+    return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      return traverse_loose_octree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+    });
   }
 
   // raylab show: the loose boxes of the nodes down to max_depth.
