@@ -15,6 +15,7 @@
 #include "accel/loose_octree/loose_octree_accel.h"
 #include "accel/octree/octree_accel.h"
 #include "accel/hybrid/hybrid_accel.h"
+#include "accel/irgrid/irgrid_accel.h"
 
 namespace raylab {
 
@@ -33,6 +34,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
       loose_octree_accelerator_info(),
       hybrid_accelerator_info(),
       bsp_accelerator_info(),
+      irgrid_accelerator_info(),
   };
   static const bool checked = [] {
     for (const auto& info : registry)

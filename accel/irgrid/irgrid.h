@@ -1,0 +1,68 @@
+#pragma once
+// The irregular grid of Perard-Gayot, Kalojanov & Slusallek, "GPU Ray
+// Tracing using Irregular Grids", Eurographics 2017, on the CPU.
+//
+// Every cell is an axis-aligned box of the *virtual grid*: the top grid
+// refined 2^depth times on each axis (the deepest octree level allowed).
+// Cell boxes are integer ranges of virtual voxels, so merging, expanding
+// and the walk's steps are exact integer operations; only the exit
+// distances are computed in floating point (double).
+//
+// The voxel map (which cell owns a voxel) is the top grid plus one octree
+// per top cell, flattened k <= 3 levels at a time: an entry is either a cell
+// id or, with kIrgridInnerNode set, k and the offset of a block of (2^k)^3
+// entries (child = the next k bits of x, y, z, most significant first). Merging rewrites the entries of the
+// merged cells; expansion only grows a cell's own box (`lo`/`hi`), so boxes
+// may overlap their neighbours while the map still names each voxel's owner.
+#include <cstdint>
+#include <vector>
+
+#include "accel/core/leaf_triangle.h"
+#include "accel/grid/dda_grid.h"
+
+namespace raylab {
+
+struct IrgridCell {
+  int32_t lo[3], hi[3];  // virtual voxels [lo, hi), the expanded box
+  uint32_t begin = 0, count = 0;  // triangles refs[begin, begin + count)
+};
+
+inline constexpr uint32_t kIrgridInnerNode = 0x80000000u;
+inline constexpr int kIrgridLevelsShift = 29;  // bits 29-30 of an inner entry: k
+inline constexpr uint32_t kIrgridBlockMask = (1u << kIrgridLevelsShift) - 1;
+inline constexpr int kIrgridMaxLevelsPerBlock = 3;
+
+struct Irgrid {
+  DdaGrid top;      // the top grid
+  DdaGrid virt;     // the virtual grid: top refined 2^depth per axis (same box)
+  int depth = 0;    // log2 of the refinement: the deepest octree level allowed
+  std::vector<uint32_t> top_nodes;  // per top cell: its root entry
+  std::vector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
+  std::vector<IrgridCell> cells;
+  std::vector<uint32_t> refs;
+  std::vector<LeafTriangle> tris;
+  bool empty = true;
+
+  // The cell owning virtual voxel v (coordinates inside the virtual grid).
+  [[gnu::always_inline]] uint32_t cell_at(const int32_t v[3]) const {
+    uint32_t e = top_nodes[(v[0] >> depth) * top.stride[0] + (v[1] >> depth) * top.stride[1] +
+                           (v[2] >> depth) * top.stride[2]];
+    for (int shift = depth; e & kIrgridInnerNode;) {
+      const int k = static_cast<int>((e >> kIrgridLevelsShift) & 3);
+      shift -= k;
+      const uint32_t mask = (1u << k) - 1;
+      const uint32_t child = ((static_cast<uint32_t>(v[0]) >> shift) & mask) |
+                             (((static_cast<uint32_t>(v[1]) >> shift) & mask) << k) |
+                             (((static_cast<uint32_t>(v[2]) >> shift) & mask) << (2 * k));
+      e = nodes[(e & kIrgridBlockMask) + child];
+    }
+    return e;
+  }
+
+  size_t bytes() const {
+    return top_nodes.size() * sizeof(uint32_t) + nodes.size() * sizeof(uint32_t) +
+           cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle);
+  }
+};
+
+}  // namespace raylab

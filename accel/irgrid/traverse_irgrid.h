@@ -1,0 +1,71 @@
+#pragma once
+// The walk of the irregular grid (Perard-Gayot et al. 2017, section 5): find
+// the cell holding the current point in the voxel map, test its triangles,
+// leave through the nearest face of the cell's (expanded) box, and look up
+// the cell just past that face.
+//
+// Robust stepping, on integer virtual-voxel coordinates v instead of a point
+// nudged past the exit: on the exit axis v moves to the first voxel beyond
+// the box's face (hi, or lo - 1); on the other axes v takes the voxel of the
+// exit point, clamped between its old value and the box's far side in the
+// direction of travel. So v never moves backwards and strictly advances on
+// one axis per step: the walk ends after at most the sum of the virtual
+// resolutions, whatever the rounding. A direction component of +-0 never
+// gives an exit and keeps its coordinate (the ray stays in its slab; a ray
+// lying in a cell face is in the cell above it, and the assignment margin
+// lists triangles on the face in both cells).
+//
+// Exactness (closest hit): every triangle of a visited cell is tested on the
+// recorder's whole [tmin, tmax], and the walk stops only once the closest
+// hit lies within the part of the ray walked so far (t <= the cell's exit,
+// grid_ray_query.h). Expansion keeps this: a cell's box only grows over
+// voxels whose owners' triangles the cell lists (or that are empty), so all
+// triangles within the assignment margin of the walked path were tested.
+#include <cstdint>
+#include <limits>
+
+#include "accel/grid/grid_ray_query.h"
+#include "accel/irgrid/irgrid.h"
+
+namespace raylab {
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stats) {
+  return walk_grid<kTest, kAnyHit, kCount>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1,
+                                                                           auto& q) {
+    int32_t v[3];
+    for (int a = 0; a < 3; ++a) v[a] = g.virt.coord(a, dr.org[a] + t0 * dr.dir[a]);
+    const IrgridCell* cells = g.cells.data();
+    const uint32_t* refs = g.refs.data();
+    const LeafTriangle* tris = g.tris.data();
+    while (true) {
+      const IrgridCell& c = cells[g.cell_at(v)];
+      q.rec.count_nodes(1);
+      double t_exit = std::numeric_limits<double>::infinity();
+      int exit_axis = -1;
+      for (int a = 0; a < 3; ++a) {
+        if (dr.step[a] == 0) continue;
+        const double t = (g.virt.boundary(a, dr.step[a] > 0 ? c.hi[a] : c.lo[a]) - dr.org[a]) * dr.inv_dir[a];
+        if (t < t_exit) {
+          t_exit = t;
+          exit_axis = a;
+        }
+      }
+      if (c.count != 0 && q.test_cell(refs + c.begin, c.count, tris)) return;  // any hit: found one
+      if constexpr (!kAnyHit) {
+        if (q.done_at(t_exit)) return;
+      }
+      if (!(t_exit < t1)) return;
+      for (int a = 0; a < 3; ++a) {
+        if (a == exit_axis || dr.step[a] == 0) continue;
+        const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
+        if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
+        else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
+      }
+      v[exit_axis] = dr.step[exit_axis] > 0 ? c.hi[exit_axis] : c.lo[exit_axis] - 1;
+      if (static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis])) return;
+    }
+  });
+}
+
+}  // namespace raylab
