@@ -24,7 +24,6 @@ namespace {
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 using test::read_json;
-using test::read_lines;
 
 using Shell = test::CommandResult;
 
