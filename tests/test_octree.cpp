@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -96,6 +97,43 @@ TEST(OctreeChildOrder, MissingChildrenAreSkippedAndNanPlanesVisitBothSides) {
   ASSERT_EQ(n, 2);
   EXPECT_EQ(kids[0].c, 1u);
   EXPECT_EQ(kids[1].c, 0u);
+}
+
+// The vector child order is the scalar definition, lane by lane: the same
+// children, order and intervals, bit for bit, also with NaN (rays in a
+// plane), +-inf (parallel rays), ties, missing children and every mirror.
+TEST(OctreeChildOrder, VectorFormEqualsScalarDefinition) {
+  Pcg32 rng(23, 7);
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const float specials[] = {nan, inf, -inf, 0.0f, -0.0f, 1.0f};
+  auto value = [&](float lo, float hi) {
+    const float u = rng.uniform();
+    if (u < 0.15f) return specials[static_cast<int>(rng.uniform() * 6.0f) % 6];
+    if (u < 0.3f) return 1.0f;  // ties with the other parameters
+    return lo + (hi - lo) * rng.uniform();
+  };
+  int visited = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const float t0 = value(-1.0f, 1.0f), t1 = value(0.0f, 3.0f);
+    float near_end[3], far_start[3];
+    for (int k = 0; k < 3; ++k) {
+      near_end[k] = value(-1.0f, 3.0f);
+      far_start[k] = rng.uniform() < 0.5f ? near_end[k] : value(-1.0f, 3.0f);
+    }
+    const uint32_t neg_mask = static_cast<uint32_t>(trial) & 7u;
+    const uint32_t mask = trial % 3 == 0 ? 0xffu : static_cast<uint32_t>(rng.uniform() * 256.0f) & 0xffu;
+    OctChild a[8], b[8];
+    const int na = octree_child_order(t0, t1, near_end, far_start, neg_mask, mask, a);
+    const int nb = octree_child_order_scalar(t0, t1, near_end, far_start, neg_mask, mask, b);
+    ASSERT_EQ(na, nb) << "trial " << trial;
+    for (int i = 0; i < na; ++i) {
+      ASSERT_EQ(a[i].c, b[i].c) << "trial " << trial << " child " << i;
+      ASSERT_EQ(std::bit_cast<uint32_t>(a[i].t0), std::bit_cast<uint32_t>(b[i].t0)) << "trial " << trial;
+      ASSERT_EQ(std::bit_cast<uint32_t>(a[i].t1), std::bit_cast<uint32_t>(b[i].t1)) << "trial " << trial;
+    }
+    visited += na;
+  }
+  EXPECT_GT(visited, 20000);
 }
 
 // ------------------------------------------------------------ brute force

@@ -112,8 +112,8 @@ AcceleratorInfo bsp_accelerator_info() {
       "general BSP tree (Ize, Wald & Parker 2008): axis, 26-DOP and triangle planes, SAH on exact polytope areas, "
       "k-d fast path for axis nodes",
       {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)"},
-       {"tplanes", "8", "triangle planes tried per node, 0..64 (the candidate set size with dirs x (bins - 1))"},
-       {"bins", "8", "candidate positions per fixed direction, 2..64 (bins - 1 planes)"},
+       {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)"},
+       {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes"},
        {"ct", "15", "SAH cost of a traversal step (K_T)"},
        {"ci", "20", "SAH cost of a triangle test (K_I)"},
        {"max_depth", "auto", "depth limit: auto = 8 + 1.3 log2 N, or 0..64"},
@@ -125,7 +125,7 @@ AcceleratorInfo bsp_accelerator_info() {
         o.triangle_planes = p.integer("tplanes");
         if (o.triangle_planes < 0 || o.triangle_planes > 64) throw SpecError("bsp: tplanes must be in 0..64");
         o.bins = p.integer("bins");
-        if (o.bins < 2 || o.bins > 64) throw SpecError("bsp: bins must be in 2..64");
+        if (o.bins != 0 && (o.bins < 2 || o.bins > 64)) throw SpecError("bsp: bins must be 0 or in 2..64");
         const double ct = p.real("ct"), ci = p.real("ci");
         if (!(ct >= 0.0 && ct <= 1e6)) throw SpecError("bsp: ct must be in [0, 1e6]");
         if (!(ci > 0.0 && ci <= 1e6)) throw SpecError("bsp: ci must be in (0, 1e6]");

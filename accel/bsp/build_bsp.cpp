@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <memory>
 
-#include <tbb/task_group.h>
+#include <tbb/parallel_invoke.h>
 
 #include "accel/bsp/convex_polytope.h"
 #include "accel/core/sah_report.h"
+#include "accel/kdtree/clip_triangle.h"  // kd_detail::next_down / next_up
 
 namespace raylab {
 
@@ -17,6 +19,12 @@ namespace {
 
 constexpr uint32_t kKindKdop = 5;  // build-time only: a fixed non-axis direction (stored as general)
 constexpr uint32_t kKindTriangle = 6;  // build-time only: a triangle's plane (stored as general)
+
+// Candidates whose SAH cost is estimated (not on an axis of a box region)
+// get exact polytope areas only if they are among the cheapest this many.
+constexpr size_t kExactlyPricedCandidates = 4;
+// Nodes from which the two subtrees are built as parallel tasks.
+constexpr size_t kParallelTaskSize = 1024;
 
 struct TmpNode {
   uint32_t kind = kBspLeaf;
@@ -32,6 +40,7 @@ struct Candidate {
   uint32_t kind = kBspLeaf;
   Vec3f n = Vec3f::Zero();
   float d = 0;
+  size_t nl = 0, nr = 0;
 };
 
 // The node's triangle references, each with the part of its triangle that
@@ -51,6 +60,128 @@ struct RefSet {
   }
 };
 
+// A node's region: a box while every plane above it is axis-aligned (then
+// the k-d tree's closed-form SAH areas are exact), a general convex polytope
+// below the first slanted plane.
+struct Region {
+  bool is_box = true;
+  Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();
+  ConvexPolytope poly;  // when !is_box
+
+  double area() const {
+    if (!is_box) return poly.surface_area();
+    const Vec3d e = hi - lo;
+    return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+  }
+  ConvexPolytope polytope() const { return is_box ? ConvexPolytope::box(lo, hi) : poly; }
+  // Exact areas of the parts below and above n . x = d.
+  std::pair<double, double> split_areas(const Vec3d& n, double d) const {
+    return is_box ? ConvexPolytope::box(lo, hi).split_areas(n, d) : poly.split_areas(n, d);
+  }
+  std::pair<Region, Region> split(uint32_t kind, const Vec3f& n, float d) const {
+    std::pair<Region, Region> out;
+    if (is_box && kind <= 2) {
+      out.first = out.second = *this;
+      out.first.hi[kind] = d;
+      out.second.lo[kind] = d;
+      return out;
+    }
+    auto parts = polytope().split(n.cast<double>(), static_cast<double>(d));
+    out.first.is_box = out.second.is_box = false;
+    out.first.poly = std::move(parts.first);
+    out.second.poly = std::move(parts.second);
+    return out;
+  }
+  // Vertices whose projections bound the region along any direction.
+  void corners(std::vector<Vec3d>& out) const {
+    out.clear();
+    if (is_box) {
+      for (int i = 0; i < 8; ++i)
+        out.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+      return;
+    }
+    for (const auto& f : poly.faces) out.insert(out.end(), f.begin(), f.end());
+  }
+};
+
+// Rounds a double to a float no larger (down) or no smaller (up) than it.
+inline float float_down(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? kd_detail::next_down(f) : f;
+}
+inline float float_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? kd_detail::next_up(f) : f;
+}
+
+// A plane direction u with two unit vectors v, w orthogonal to it and each
+// other: the region's extents along the three give the box in that frame
+// whose closed-form areas estimate the child areas (exact for a box region
+// and an axis direction).
+struct Frame {
+  Vec3d u, v, w;
+};
+
+Frame frame_of(const Vec3d& u) {
+  const Vec3d helper = std::fabs(u.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY();
+  const Vec3d v = helper.cross(u).normalized();
+  return Frame{u, v, u.cross(v)};
+}
+
+// Estimated fractions of the node's area below and above u . x = p, from
+// the region's box in the plane's frame (the k-d tree's SAH formula).
+struct AreaEstimate {
+  double lo = 0, hi = 0, cross = 0, perimeter = 0, inv_total = 0;
+
+  AreaEstimate(const std::vector<Vec3d>& corners, const Frame& f) {
+    double vlo = std::numeric_limits<double>::infinity(), vhi = -vlo, wlo = vlo, whi = -vlo;
+    lo = vlo, hi = -vlo;
+    for (const Vec3d& c : corners) {
+      const double su = f.u.dot(c), sv = f.v.dot(c), sw = f.w.dot(c);
+      lo = std::min(lo, su), hi = std::max(hi, su);
+      vlo = std::min(vlo, sv), vhi = std::max(vhi, sv);
+      wlo = std::min(wlo, sw), whi = std::max(whi, sw);
+    }
+    const double dv = vhi - vlo, dw = whi - wlo;
+    cross = dv * dw;
+    perimeter = dv + dw;
+    const double total = cross + (hi - lo) * perimeter;
+    inv_total = total > 0 ? 1.0 / total : 0.0;
+  }
+  double below(double p) const { return (cross + (p - lo) * perimeter) * inv_total; }
+  // Whether a plane at float position p cuts the region. The region's
+  // extent is rounded inward to float first: vertices made by an earlier
+  // plane lie on it only up to double rounding, and without this the same
+  // float plane could cut off a sliver of empty space again and again (each
+  // time earning the empty-space bonus) until the depth limit.
+  bool cuts(float p) const { return p > float_up(lo) && p < float_down(hi); }
+  double above(double p) const { return (cross + (hi - p) * perimeter) * inv_total; }
+};
+
+// Sweep events along one direction, in the k-d tree's order at equal
+// positions (Wald & Havran 2006): ends, then planar, then starts. An event
+// is one integer (the float's bits mapped to an order-preserving unsigned
+// key, then the type), so sorting compares integers.
+constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
+inline uint64_t make_event(float pos, uint32_t type) {
+  const uint32_t b = std::bit_cast<uint32_t>(pos == 0.0f ? 0.0f : pos);  // -0 sorts as +0
+  const uint32_t key = (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+  return (static_cast<uint64_t>(key) << 2) | type;
+}
+inline float event_pos(uint64_t e) {
+  const uint32_t key = static_cast<uint32_t>(e >> 2);
+  return std::bit_cast<float>((key & 0x80000000u) ? (key & 0x7fffffffu) : ~key);
+}
+inline uint32_t event_type(uint64_t e) { return static_cast<uint32_t>(e & 3u); }
+
+// Per-thread working memory of find_split (no task switch happens inside).
+struct Scratch {
+  std::vector<uint64_t> events;
+  std::vector<double> lo_s, hi_s;  // per direction and reference: projected extent
+  std::vector<uint32_t> hist_min, hist_max;
+  std::vector<Vec3d> corners;
+};
+
 // Clipped polygons longer than this keep their parent's polygon (unclipped,
 // conservative); a triangle in a convex region rarely has more than 8.
 constexpr size_t kMaxClippedVertices = 24;
@@ -66,6 +197,11 @@ class Builder {
         mag = std::max(mag, v_[i][k].cwiseAbs().maxCoeff());
       }
     tol_ = 1e-12 * mag;
+    const Vec3f* dirs = bsp_fixed_directions();
+    for (int i = 0; i < 13; ++i) {
+      const Vec3d u = dirs[i].cast<double>();
+      frames_[i] = i < 3 ? Frame{u, Vec3d::Unit((i + 1) % 3), Vec3d::Unit((i + 2) % 3)} : frame_of(u);
+    }
   }
 
   RefSet root_refs() const {
@@ -76,13 +212,15 @@ class Builder {
     return r;
   }
 
-  std::unique_ptr<TmpNode> build(RefSet refs, ConvexPolytope poly, int depth) const {
+  std::unique_ptr<TmpNode> build(RefSet refs, Region region, int depth) const {
     auto node = std::make_unique<TmpNode>();
-    node->area = poly.surface_area();
+    node->area = region.area();
     const size_t n = refs.size();
+    // Wald & Havran's termination: a leaf when no split is cheaper than
+    // testing every triangle, at the depth limit, or in a region without area.
     const double leaf_cost = opt_.intersection_cost * static_cast<double>(n);
     Candidate best;
-    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(refs, poly, node->area, leaf_cost);
+    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(refs, region, node->area, leaf_cost);
     if (!(best.cost < leaf_cost)) {
       node->ids = std::move(refs.ids);
       return node;
@@ -97,13 +235,11 @@ class Builder {
     node->kind = best.kind;
     node->n = best.n;
     node->d = best.d;
-    auto parts = poly.split(best.n.cast<double>(), static_cast<double>(best.d));
-    poly = ConvexPolytope{};
-    if (n > 4096) {
-      tbb::task_group g;
-      g.run([&] { node->child[0] = build(std::move(left), std::move(parts.first), depth + 1); });
-      node->child[1] = build(std::move(right), std::move(parts.second), depth + 1);
-      g.wait();
+    auto parts = region.split(best.kind, best.n, best.d);
+    region = Region{};
+    if (n >= kParallelTaskSize) {
+      tbb::parallel_invoke([&] { node->child[0] = build(std::move(left), std::move(parts.first), depth + 1); },
+                           [&] { node->child[1] = build(std::move(right), std::move(parts.second), depth + 1); });
     } else {
       node->child[0] = build(std::move(left), std::move(parts.first), depth + 1);
       node->child[1] = build(std::move(right), std::move(parts.second), depth + 1);
@@ -173,63 +309,140 @@ class Builder {
     }
   }
 
-  void consider(Candidate& best, const ConvexPolytope& poly, double area, uint32_t kind, const Vec3f& nf, float df,
-                size_t nl, size_t nr, size_t n) const {
-    if (nl == n && nr == n) return;
-    // Lower bound without the areas: al + ar >= area (the cap counts twice),
-    // so al nl + ar nr >= min(nl, nr) area. Skips most polytope clips.
-    const double bonus = (nl == 0 || nr == 0) ? 1.0 - opt_.empty_bonus : 1.0;
-    if ((opt_.traversal_cost + opt_.intersection_cost * static_cast<double>(std::min(nl, nr))) * bonus >= best.cost) return;
-    const auto [al, ar] = poly.split_areas(nf.cast<double>(), static_cast<double>(df));
-    double cost = opt_.traversal_cost +
-                  opt_.intersection_cost * (al * static_cast<double>(nl) + ar * static_cast<double>(nr)) / area;
-    cost *= bonus;
-    if (cost < best.cost) best = Candidate{cost, kind, nf, df};
+  // The candidates of one node: the best exactly priced one so far (axis
+  // planes of a box region, and re-priced estimates) and the cheapest few
+  // estimated ones, which get exact polytope areas at the end.
+  struct Search {
+    Candidate exact;
+    std::array<Candidate, kExactlyPricedCandidates> estimated;
+    size_t num_estimated = 0;
+    size_t n = 0;
+    double ct = 0, lambda_empty = 0;
+    std::array<Candidate, kExactlyPricedCandidates>::iterator est_end() { return estimated.begin() + num_estimated; }
+  };
+
+  // Prices a plane with area fractions (pl, pr) and keeps it if it can win.
+  void offer(Search& s, bool is_exact, uint32_t kind, const Vec3f& n, float d, size_t nl, size_t nr, double pl,
+             double pr) const {
+    if (nl == s.n && nr == s.n) return;  // reduces neither side
+    // More than half of the references straddling: the k-d tree's guard
+    // against reference blow-up (see accel/kdtree/build_sah_events.cpp).
+    if (2 * (nl + nr) > 3 * s.n + 2) return;
+    const double lambda = (nl == 0 || nr == 0) ? s.lambda_empty : 1.0;
+    // Lower bound with exact areas (al + ar >= area): skip hopeless planes.
+    const double ci = opt_.intersection_cost;
+    if (lambda * (s.ct + ci * static_cast<double>(std::min(nl, nr))) >= s.exact.cost) return;
+    const double cost = lambda * (s.ct + ci * (pl * static_cast<double>(nl) + pr * static_cast<double>(nr)));
+    const Candidate c{cost, kind, n, d, nl, nr};
+    if (is_exact) {
+      if (cost < s.exact.cost) s.exact = c;
+      return;
+    }
+    // Insertion into the short list, kept sorted by cost.
+    size_t i = s.num_estimated;
+    if (i < kExactlyPricedCandidates) {
+      ++s.num_estimated;
+    } else {
+      i = kExactlyPricedCandidates - 1;  // replaces the dearest, if cheaper
+      if (!(cost < s.estimated[i].cost)) return;
+    }
+    for (; i > 0 && cost < s.estimated[i - 1].cost; --i) s.estimated[i] = s.estimated[i - 1];
+    s.estimated[i] = c;
   }
 
-  // The cheapest candidate, if any is cheaper than `leaf_cost`.
-  Candidate find_split(const RefSet& refs, const ConvexPolytope& poly, double area, double leaf_cost) const {
-    Candidate best;
-    best.cost = leaf_cost;
+  // Projected extents of every reference along the first `dirs` fixed
+  // directions, in one pass over the clipped polygons:
+  // sc.lo_s[di * n + i], sc.hi_s[di * n + i].
+  void project(Scratch& sc, const RefSet& refs, int dirs) const {
     const size_t n = refs.size();
-    const Vec3f* dirs = bsp_fixed_directions();
-    const int bins = std::max(2, opt_.bins);
-    std::vector<double> lo_s(n), hi_s(n);
-    std::vector<uint32_t> hist_min(bins), hist_max(bins);
-    for (int di = 0; di < opt_.directions; ++di) {
-      const Vec3f& uf = dirs[di];
-      const Vec3d u = uf.cast<double>();
-      double tri_lo = std::numeric_limits<double>::infinity(), tri_hi = -tri_lo;
-      for (size_t i = 0; i < n; ++i) {
-        side_range(refs, i, u, 0.0, lo_s[i], hi_s[i]);
-        tri_lo = std::min(tri_lo, lo_s[i]);
-        tri_hi = std::max(tri_hi, hi_s[i]);
+    sc.lo_s.resize(dirs * n);
+    sc.hi_s.resize(dirs * n);
+    for (size_t i = 0; i < n; ++i) {
+      double lo[13], hi[13];
+      std::fill(lo, lo + dirs, std::numeric_limits<double>::infinity());
+      std::fill(hi, hi + dirs, -std::numeric_limits<double>::infinity());
+      for (uint32_t k = refs.start[i]; k < refs.start[i + 1]; ++k) {
+        const Vec3d& p = refs.pts[k];
+        for (int di = 0; di < dirs; ++di) {
+          const double x = frames_[di].u.dot(p);
+          lo[di] = std::min(lo[di], x);
+          hi[di] = std::max(hi[di], x);
+        }
       }
-      const auto [p_lo, p_hi] = poly.extent(u);
-      const double lo = std::max(p_lo, tri_lo), hi = std::min(p_hi, tri_hi);
-      if (!(hi > lo)) continue;
-      std::fill(hist_min.begin(), hist_min.end(), 0u);
-      std::fill(hist_max.begin(), hist_max.end(), 0u);
-      const double scale = bins / (hi - lo);
-      auto bin_of = [&](double s) { return std::clamp(static_cast<int>((s - lo) * scale), 0, bins - 1); };
-      for (size_t i = 0; i < n; ++i) {
-        hist_min[bin_of(lo_s[i])]++;
-        hist_max[bin_of(hi_s[i])]++;
-      }
-      // (Planes at the ends of the triangles' extent, cutting off empty
-      // space, were tried: on the bunny they used up the depth limit and
-      // raised the SAH cost from 102 to 157, so they are not candidates.)
-      const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
-      // nl(b) = triangles starting below boundary b, nr(b) = ending above it.
-      size_t below = 0, above = n;
-      for (int b = 1; b < bins; ++b) {
-        below += hist_min[b - 1];
-        above -= hist_max[b - 1];
-        const float df = static_cast<float>(lo + (hi - lo) * b / bins);
-        consider(best, poly, area, kind, uf, df, below, above, n);
+      for (int di = 0; di < dirs; ++di) sc.lo_s[di * n + i] = lo[di], sc.hi_s[di * n + i] = hi[di];
+    }
+  }
+
+  // Exact sweep over one direction's sorted events (Wald & Havran 2006 with
+  // the BSP side rule: a reference lying in the plane goes below).
+  void sweep_direction(Search& s, Scratch& sc, size_t n, int di, const AreaEstimate& est, bool is_exact) const {
+    const Vec3f uf = bsp_fixed_directions()[di];
+    const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
+    std::vector<uint64_t>& ev = sc.events;
+    ev.clear();
+    const double* lo_s = sc.lo_s.data() + di * n;
+    const double* hi_s = sc.hi_s.data() + di * n;
+    for (size_t i = 0; i < n; ++i) {
+      // Outward to float, so that a plane at an event's position has the
+      // reference exactly on the side the sweep counts it.
+      const float flo = float_down(lo_s[i]), fhi = float_up(hi_s[i]);
+      if (flo == fhi) {
+        ev.push_back(make_event(flo, kPlanar));
+      } else {
+        ev.push_back(make_event(flo, kStart));
+        ev.push_back(make_event(fhi, kEnd));
       }
     }
-    // Planes of the node's own triangles, counted exactly.
+    std::sort(ev.begin(), ev.end());
+    size_t nl = 0, nr = n;
+    for (size_t i = 0; i < ev.size();) {
+      const uint64_t group = ev[i] >> 2;
+      const float p = event_pos(ev[i]);
+      size_t count[3] = {0, 0, 0};
+      for (; i < ev.size() && (ev[i] >> 2) == group; ++i) ++count[event_type(ev[i])];
+      nr -= count[kPlanar] + count[kEnd];
+      nl += count[kPlanar];
+      // Only planes strictly inside the region cut it.
+      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, nl, nr, est.below(p), est.above(p));
+      nl += count[kStart];
+    }
+  }
+
+  // The old binned search (`bins` >= 2): bins - 1 planes over the extent.
+  void bin_direction(Search& s, Scratch& sc, size_t n, int di, const AreaEstimate& est, bool is_exact) const {
+    const Vec3f uf = bsp_fixed_directions()[di];
+    const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
+    const int bins = opt_.bins;
+    const double* lo_s = sc.lo_s.data() + di * n;
+    const double* hi_s = sc.hi_s.data() + di * n;
+    double tri_lo = std::numeric_limits<double>::infinity(), tri_hi = -tri_lo;
+    for (size_t i = 0; i < n; ++i) {
+      tri_lo = std::min(tri_lo, lo_s[i]);
+      tri_hi = std::max(tri_hi, hi_s[i]);
+    }
+    const double lo = std::max(est.lo, tri_lo), hi = std::min(est.hi, tri_hi);
+    if (!(hi > lo)) return;
+    sc.hist_min.assign(bins, 0u);
+    sc.hist_max.assign(bins, 0u);
+    const double scale = bins / (hi - lo);
+    auto bin_of = [&](double x) { return std::clamp(static_cast<int>((x - lo) * scale), 0, bins - 1); };
+    for (size_t i = 0; i < n; ++i) {
+      sc.hist_min[bin_of(lo_s[i])]++;
+      sc.hist_max[bin_of(hi_s[i])]++;
+    }
+    size_t below = 0, above = n;
+    for (int b = 1; b < bins; ++b) {
+      below += sc.hist_min[b - 1];
+      above -= sc.hist_max[b - 1];
+      const float p = static_cast<float>(lo + (hi - lo) * b / bins);
+      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, below, above, est.below(p), est.above(p));
+    }
+  }
+
+  // Planes of up to `triangle_planes` of the node's triangles (evenly spaced
+  // in its list), counted exactly.
+  void triangle_planes(Search& s, Scratch& sc, const RefSet& refs) const {
+    const size_t n = refs.size();
     const size_t tries = std::min<size_t>(static_cast<size_t>(std::max(0, opt_.triangle_planes)), n);
     for (size_t k = 0; k < tries; ++k) {
       const uint32_t id = refs.ids[k * n / tries];
@@ -238,6 +451,8 @@ class Builder {
       const Vec3f nf = nd.normalized().cast<float>();
       const float df = static_cast<float>(nf.cast<double>().dot(v_[id][0]));
       const Vec3d nn = nf.cast<double>();
+      const AreaEstimate est(sc.corners, frame_of(nn));
+      if (!est.cuts(df)) continue;
       size_t nl = 0, nr = 0;
       for (size_t j = 0; j < n; ++j) {
         double smin, smax;
@@ -245,16 +460,50 @@ class Builder {
         nl += goes_below(smin, smax);
         nr += goes_above(smin, smax);
       }
-      consider(best, poly, area, kKindTriangle, nf, df, nl, nr, n);
+      offer(s, false, kKindTriangle, nf, df, nl, nr, est.below(df), est.above(df));
     }
-    return best;
+  }
+
+  // The cheapest candidate, if any is cheaper than `leaf_cost`. Every
+  // candidate is first priced with the areas of the region's box in the
+  // plane's frame (exact for axis planes of a box region, as in the k-d
+  // tree); the cheapest estimated ones are then priced with the exact areas
+  // of the two child polytopes (Ize et al.'s SAH), one clip each.
+  Candidate find_split(const RefSet& refs, const Region& region, double area, double leaf_cost) const {
+    static thread_local Scratch sc;
+    Search s;
+    s.exact.cost = leaf_cost;
+    s.n = refs.size();
+    s.ct = opt_.traversal_cost;
+    s.lambda_empty = 1.0 - static_cast<double>(opt_.empty_bonus);
+    region.corners(sc.corners);
+    project(sc, refs, opt_.directions);
+    for (int di = 0; di < opt_.directions; ++di) {
+      const AreaEstimate est(sc.corners, frames_[di]);
+      if (!(est.hi > est.lo)) continue;  // flat along this direction
+      const bool is_exact = region.is_box && di < 3;
+      if (opt_.bins >= 2) bin_direction(s, sc, s.n, di, est, is_exact);
+      else sweep_direction(s, sc, s.n, di, est, is_exact);
+    }
+    triangle_planes(s, sc, refs);
+    const double ci = opt_.intersection_cost;
+    for (auto it = s.estimated.begin(); it != s.est_end(); ++it) {
+      const Candidate& c = *it;
+      const double lambda = (c.nl == 0 || c.nr == 0) ? s.lambda_empty : 1.0;
+      if (lambda * (s.ct + ci * static_cast<double>(std::min(c.nl, c.nr))) >= s.exact.cost) continue;
+      const auto [al, ar] = region.split_areas(c.n.cast<double>(), static_cast<double>(c.d));
+      const double cost =
+          lambda * (s.ct + ci * (al * static_cast<double>(c.nl) + ar * static_cast<double>(c.nr)) / area);
+      if (cost < s.exact.cost) s.exact = Candidate{cost, c.kind, c.n, c.d, c.nl, c.nr};
+    }
+    return s.exact;
   }
 
   BspBuildOptions opt_;
   std::vector<std::array<Vec3d, 3>> v_;
+  std::array<Frame, 13> frames_;
   double tol_ = 0;
 };
-
 // Depth-first flattening into child pairs; gathers the statistics.
 void flatten(const TmpNode& t, uint32_t at, int depth, BspTree& out, BspBuildStats& s, double root_area) {
   s.max_depth = std::max(s.max_depth, depth);
@@ -306,8 +555,8 @@ BspTree build_bsp(const TriangleMesh& mesh, const BspBuildOptions& options, BspB
   const int auto_depth = static_cast<int>(std::lround(8.0 + 1.3 * std::log2(static_cast<double>(std::max<size_t>(n, 1)))));
   b.depth_limit_ = std::min(kBspMaxDepthLimit, options.max_depth < 0 ? auto_depth : options.max_depth);
   s.depth_limit = b.depth_limit_;
-  ConvexPolytope root;
-  if (n > 0) root = ConvexPolytope::box(out.bounds.lo.cast<double>(), out.bounds.hi.cast<double>());
+  Region root;  // an empty mesh: a point (area 0, one leaf)
+  if (n > 0) root.lo = out.bounds.lo.cast<double>(), root.hi = out.bounds.hi.cast<double>();
   // A flat scene box has zero volume; its faces still give the SAH an area.
   const std::unique_ptr<TmpNode> tree = b.build(b.root_refs(), std::move(root), 0);
   out.nodes.resize(1);

@@ -4,27 +4,41 @@
 //
 // Candidate planes at a node:
 //  - a fixed set of directions (the 3 axes, then the 4 body diagonals and
-//    the 6 face diagonals of the 26-DOP: `directions` = 3, 7 or 13), each at
-//    `bins` - 1 positions spread over the node's extent along it (binned
-//    counts, as in binned BVH builders: O(N) per direction);
+//    the 6 face diagonals of the 26-DOP: `directions` = 3, 7 or 13). Along
+//    each, every reference's extent is projected once per node and the
+//    sorted start / end / planar events are swept exactly as in the k-d
+//    tree's SAH builder (Wald & Havran 2006), so every position where a
+//    count changes is a candidate (`bins` >= 2: bins - 1 binned positions
+//    instead, the original scheme, kept for the sweep);
 //  - the planes of up to `triangle_planes` of the node's triangles (evenly
 //    spaced in the node's list), counted exactly. These are what let a BSP
 //    leaf hug slanted geometry, the paper's point.
-// Each candidate is priced by the SAH with the exact surface areas of the two
-// child polytopes (convex_polytope.h), not of boxes; the cheapest wins if it
-// beats making a leaf. Every triangle reference carries the part of its
-// triangle inside the node's region (clipped by the planes above it, the BSP
-// form of the k-d tree's perfect splits), so counts and assignments see only
-// what really lies in the region: a reference goes below when its part
-// reaches below the plane or lies in it, above when it reaches above, both
-// (each with its clipped part) when it straddles. Side tests are done in
-// double precision on the stored (float) plane with a tolerance of 1e-12 of
-// the scene's magnitude; the traversal's margins are orders of magnitude
-// wider, so a triangle that meets a leaf's region is always found there.
+// Pricing: while every plane above a node is axis-aligned its region is a
+// box and axis candidates get the k-d tree's closed-form areas (exact). All
+// other candidates are first priced with the box of the region in the
+// plane's own frame, and the few cheapest of those are re-priced with the
+// exact surface areas of the two child polytopes (convex_polytope.h), as
+// Ize et al. do; the cheapest exactly priced plane wins if it beats making a
+// leaf (Wald & Havran's termination: SAH cost < K_I N). With `directions` =
+// 3 and no triangle planes this is the k-d tree's builder (same costs, empty
+// bonus, perfect splits by clipping, depth limit and straddling guard).
 //
-// Cost: O(N (directions + triangle_planes)) per level plus a constant number
-// of polytope clips per node, so O(N log N) for a balanced tree; the depth is
-// capped like the k-d tree's (8 + 1.3 log2 N, at most 64).
+// Every triangle reference carries the part of its triangle inside the
+// node's region (clipped by the planes above it, the BSP form of the k-d
+// tree's perfect splits), so counts and assignments see only what really
+// lies in the region: a reference goes below when its part reaches below
+// the plane or lies in it, above when it reaches above, both (each with its
+// clipped part) when it straddles. Event positions are rounded outward to
+// float (the stored plane's precision), so a plane at an event has the
+// reference on the side it was counted on. Side tests are done in double
+// precision on the stored (float) plane with a tolerance of 1e-12 of the
+// scene's magnitude; the traversal's margins are orders of magnitude wider,
+// so a triangle that meets a leaf's region is always found there.
+//
+// Cost: O(n log n (directions) + n triangle_planes) per node of n
+// references plus a constant number of polytope clips, so O(N log^2 N) for
+// a balanced tree; the depth is capped like the k-d tree's (8 + 1.3 log2 N,
+// at most 64).
 #include <cstddef>
 
 #include "accel/bsp/bsp_node.h"
@@ -35,7 +49,7 @@ namespace raylab {
 struct BspBuildOptions {
   int directions = 13;       // fixed plane directions: 3 (axes), 7 (+ body diagonals), 13 (+ face diagonals)
   int triangle_planes = 8;   // triangle planes tried per node (0 = fixed directions only)
-  int bins = 8;              // positions per fixed direction
+  int bins = 0;              // 0: exact event sweep; 2..64: bins - 1 binned positions per direction
   float traversal_cost = 15.0f;   // K_T
   float intersection_cost = 20.0f;  // K_I
   float empty_bonus = 0.2f;  // cost reduction of splits with an empty child

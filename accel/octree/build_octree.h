@@ -30,6 +30,14 @@ struct OctreeBuildOptions {
   // node's references is not made (the node stays a leaf).
   double max_growth = 2.0;
   OctreeAssign assign = OctreeAssign::Exact;
+  // term=sah: a node above `leaf` is split only when the surface-area cost
+  // of its eight children, taken as leaves, beats keeping it as a leaf
+  // (MacDonald & Booth 1990's greedy termination; each child cube has 1/4
+  // of its parent's surface, so it is met by 1/4 of the rays that meet the
+  // parent): ct + sum_c blocks(n_c) / 4 < blocks(n), in units of one
+  // 4-wide triangle block test; ct is the cost of visiting a node.
+  bool sah = false;
+  double ct = 1.0;
 };
 
 // Throws std::length_error when a node would hold more than kOctMaxNodeRefs

@@ -31,14 +31,26 @@
 // plane gets NaN, which every comparison below treats as "visit", and a ray
 // starting inside the cube starts with t0 = tmin in the child holding its
 // origin. So the walk finds every hit brute force finds, bit for bit.
+//
+// Node lists: by default SIMD triangle blocks (octree_leaf_blocks.h), four
+// triangles per vector test; `simd=0` (and tri=mt) test the same lists one
+// triangle at a time. Neither uses a mailbox: a triangle listed in several
+// leaves the ray crosses is tested in each, which on Sponza and the stadium
+// cost less than the per-triangle lookups (docs/octrees.md), and it keeps
+// the scalar variant's counted work equal to the blocks'.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/mailbox.h"
+#include "accel/octree/octree_leaf_blocks.h"
 #include "accel/octree/octree_layouts.h"
 
 namespace raylab {
@@ -49,6 +61,8 @@ struct OctreeView {
   OctreeCube cube;
   const LeafTriangle* tris = nullptr;  // once per triangle, in the order the nodes first refer to them
   const uint32_t* ids = nullptr;       // node ranges of indices into tris
+  // SIMD node lists (simd=1, watertight): a node's first_ref is then its first block.
+  const OctTriangleBlock* blocks = nullptr;
   bool empty = true;
 };
 
@@ -103,9 +117,10 @@ struct OctChild {
 // order it enters them. near_end[k]: where the ray leaves the (inflated)
 // entry-side half along k; far_start[k]: where it enters the far half.
 // `mask`: children that exist. Returns how many were written to out[].
-[[gnu::always_inline]] inline int octree_child_order(float t0, float t1, const float near_end[3],
-                                                    const float far_start[3], uint32_t neg_mask, uint32_t mask,
-                                                    OctChild out[8]) {
+// This is the scalar definition; octree_child_order() below computes the
+// same with one 8-lane vector per quantity where AVX is available.
+inline int octree_child_order_scalar(float t0, float t1, const float near_end[3], const float far_start[3],
+                                     uint32_t neg_mask, uint32_t mask, OctChild out[8]) {
   // Entry of child b (ray order): the latest of t0 and the far_start of its
   // far axes; exit: the earliest of t1 and the near_end of its near axes.
   // Built up over the bits (each child from one with a bit fewer), 7 max
@@ -138,14 +153,71 @@ struct OctChild {
   return n;
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Layout>
+// The child mask in ray order: bit b = child b ^ neg_mask exists (Revelles'
+// mirroring applied to the mask, one swap of bit groups per negative axis).
+[[gnu::always_inline]] inline uint32_t oct_mask_in_ray_order(uint32_t mask, uint32_t neg_mask) {
+  if (neg_mask & 1u) mask = ((mask & 0x55u) << 1) | ((mask >> 1) & 0x55u);
+  if (neg_mask & 2u) mask = ((mask & 0x33u) << 2) | ((mask >> 2) & 0x33u);
+  if (neg_mask & 4u) mask = ((mask & 0x0fu) << 4) | ((mask >> 4) & 0x0fu);
+  return mask;
+}
+
+// octree_child_order_scalar() with the eight entries and exits as lanes of
+// one vector each (lane b = child b in ray order). Same operations on the
+// same values: max/min with the second operand winning on NaN are exactly
+// `x > y ? x : y` and `x < y ? x : y`, and the -inf/+inf in lanes an axis
+// does not apply to leave the lane unchanged. Profiling the scalar loop on
+// the stadium showed the compiler's partial vectorisation of it stalling on
+// store-to-load forwarding (~20% of the walk); this form has no such
+// round trip. tests/test_octree.cpp compares the two on random and
+// non-finite inputs.
+[[gnu::always_inline]] inline int octree_child_order(float t0, float t1, const float near_end[3],
+                                                    const float far_start[3], uint32_t neg_mask, uint32_t mask,
+                                                    OctChild out[8]) {
+#if defined(__AVX__)
+  const __m256 neg_inf = _mm256_set1_ps(-std::numeric_limits<float>::infinity());
+  const __m256 pos_inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  // Lanes whose bit k is set: 0xaa (k = 0), 0xcc (k = 1), 0xf0 (k = 2).
+  __m256 enter = _mm256_set1_ps(t0);
+  enter = _mm256_max_ps(_mm256_blend_ps(neg_inf, _mm256_set1_ps(far_start[0]), 0xaa), enter);
+  enter = _mm256_max_ps(_mm256_blend_ps(neg_inf, _mm256_set1_ps(far_start[1]), 0xcc), enter);
+  enter = _mm256_max_ps(_mm256_blend_ps(neg_inf, _mm256_set1_ps(far_start[2]), 0xf0), enter);
+  __m256 leave = _mm256_set1_ps(t1);
+  leave = _mm256_min_ps(_mm256_blend_ps(_mm256_set1_ps(near_end[0]), pos_inf, 0xaa), leave);
+  leave = _mm256_min_ps(_mm256_blend_ps(_mm256_set1_ps(near_end[1]), pos_inf, 0xcc), leave);
+  leave = _mm256_min_ps(_mm256_blend_ps(_mm256_set1_ps(near_end[2]), pos_inf, 0xf0), leave);
+  uint32_t visit = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(enter, leave, _CMP_LE_OQ))) &
+                   oct_mask_in_ray_order(mask, neg_mask);
+  alignas(32) float e0s[8], e1s[8];
+  _mm256_store_ps(e0s, enter);
+  _mm256_store_ps(e1s, leave);
+  int n = 0;
+  for (; visit != 0; visit &= visit - 1) {
+    const uint32_t b = static_cast<uint32_t>(__builtin_ctz(visit));
+    const float e0 = e0s[b];
+    int i = n++;
+    while (i > 0 && out[i - 1].t0 > e0) {
+      out[i] = out[i - 1];
+      --i;
+    }
+    out[i] = OctChild{b ^ neg_mask, e0, e1s[b]};
+  }
+  return n;
+#else
+  return octree_child_order_scalar(t0, t1, near_end, far_start, neg_mask, mask, out);
+#endif
+}
+
+// kBlocks: node lists are SIMD triangle blocks (watertight test only).
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, typename Layout>
 inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
   OctRay r;
   if (!oct_enter_root(tree.cube, ray, r)) return rec.hit();
-  const TrianglePrecompute<kTest> pre(ray);
-  RayMailbox mailbox;
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD lists run the watertight test");
+  using ListRay = std::conditional_t<kBlocks, BlockRay<kOctBlockWidth>, TrianglePrecompute<kTest>>;
+  const ListRay pre(ray);
 
   struct Entry {
     uint64_t handle;
@@ -163,13 +235,15 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
     rec.count_nodes(1);
     const OctNodeRec node = tree.layout.node(cur.handle, cur.level);
     const uint32_t count = node.meta >> 8;
-    // Exact assignment lists a large triangle in many leaves: the mailbox
-    // tests it once per ray (a miss stays a miss, a hit is already recorded).
-    const uint32_t* ids = tree.ids + node.first_ref;
-    for (uint32_t i = 0; i < count; ++i) {
-      if (mailbox.seen(ids[i])) continue;
-      if (intersect_leaf_triangle(pre, ray, tree.tris[ids[i]], rec)) {
-        if constexpr (kAnyHit) return rec.hit();
+    if (count) {
+      bool kept;
+      if constexpr (kBlocks)
+        kept = intersect_block_leaf<kOctBlockWidth>(tree.blocks + node.first_ref, oct_node_blocks(count), pre,
+                                                    ray.tmin, rec);
+      else
+        kept = intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + node.first_ref, count, rec);
+      if constexpr (kAnyHit) {
+        if (kept) return rec.hit();
       }
     }
     const float t_bound = rec.tmax() + r.delta_t;
@@ -186,16 +260,21 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
       OctChild kids[8];
       const int n = octree_child_order(cur.t0, cur.t1 < t_bound ? cur.t1 : t_bound, near_end, far_start, r.neg_mask,
                                        mask, kids);
-      for (int i = n - 1; i >= 0; --i) {
-        const uint32_t c = kids[i].c;
-        Entry& e = stack[sp++];
-        e.handle = tree.layout.child(cur.handle, node, c);
-        e.lattice[0] = cur.lattice[0] + ((c & 1u) ? half : 0u);
-        e.lattice[1] = cur.lattice[1] + ((c & 2u) ? half : 0u);
-        e.lattice[2] = cur.lattice[2] + ((c & 4u) ? half : 0u);
-        e.level = cur.level + 1;
-        e.t0 = kids[i].t0;
-        e.t1 = kids[i].t1;
+      auto entry = [&](const OctChild& k) {
+        const uint32_t c = k.c;
+        return Entry{tree.layout.child(cur.handle, node, c),
+                     {cur.lattice[0] + ((c & 1u) ? half : 0u), cur.lattice[1] + ((c & 2u) ? half : 0u),
+                      cur.lattice[2] + ((c & 4u) ? half : 0u)},
+                     cur.level + 1,
+                     k.t0,
+                     k.t1};
+      };
+      for (int i = n - 1; i >= 1; --i) stack[sp++] = entry(kids[i]);
+      // The nearest child is entered at once (its entry is <= t_bound, as
+      // the order was computed on [t0, min(t1, t_bound)]): no stack round trip.
+      if (n > 0) {
+        cur = entry(kids[0]);
+        continue;
       }
     }
     // Next node that can still hold a closer hit.
