@@ -9,6 +9,7 @@
 
 #include "accel/bsp/build_bsp.h"
 #include "accel/bsp/convex_polytope.h"
+#include "base/mesh_shapes.h"
 #include "scenes/procedural.h"
 #include "tests/accel_agreement.h"
 
@@ -165,6 +166,51 @@ TEST(Bsp, CandidateSetsAndStatistics) {
   EXPECT_EQ(leaf->build(mesh).nodes, 1u);
   const auto rays = test::rays_at_triangles(mesh, 300, 1);
   EXPECT_EQ(test::count_brute_mismatches(*leaf, mesh, rays), 0u);
+}
+
+// A sphere in its box leaves the box's corners empty: slanted planes may cut
+// them off, but no plane may cut a region it already bounds (the same float
+// plane again, through double rounding of the region's vertices, used to
+// shave slivers level after level). Diagonal nodes store the index of their
+// direction, whose per-ray constants the traversal uses.
+TEST(Bsp, NoPlaneRepeatsOnAPathAndDiagonalNodesNameTheirDirection) {
+  const TriangleMesh mesh = make_uv_sphere(24, 12, Vec3f(0.1f, 0.2f, 0.3f), 0.7f);
+  BspBuildStats st;
+  const BspTree t = build_bsp(mesh, BspBuildOptions{}, &st);
+  ASSERT_GT(st.kdop_nodes, 0u);
+  size_t fixed = 0;
+  for (const BspNode& node : t.nodes) {
+    if (node.kind() != kBspFixed) continue;
+    ++fixed;
+    ASSERT_GE(node.direction(), 3u);
+    ASSERT_LT(node.direction(), 13u);
+    const Vec3f& u = bsp_fixed_directions()[node.direction()];
+    EXPECT_EQ(Vec3f(node.n[0], node.n[1], node.n[2]), u);
+  }
+  EXPECT_EQ(fixed, st.kdop_nodes);
+  struct Item {
+    uint32_t node;
+    std::vector<uint32_t> path;
+  };
+  std::vector<Item> todo{{0, {}}};
+  while (!todo.empty()) {
+    Item it = std::move(todo.back());
+    todo.pop_back();
+    const BspNode& node = t.nodes[it.node];
+    if (node.is_leaf()) continue;
+    for (const uint32_t a : it.path) {
+      const BspNode& up = t.nodes[a];
+      const bool same = up.n[0] == node.n[0] && up.n[1] == node.n[1] && up.n[2] == node.n[2] && up.d == node.d;
+      ASSERT_FALSE(same) << "node " << it.node << " repeats the plane of its ancestor " << a;
+    }
+    it.path.push_back(it.node);
+    todo.push_back({node.index, it.path});
+    todo.push_back({node.index + 1, it.path});
+  }
+  const auto rays = test::rays_at_triangles(mesh, 300, 2);
+  auto acc = make_accelerator("bsp");
+  acc->build(mesh);
+  EXPECT_EQ(test::count_brute_mismatches(*acc, mesh, rays), 0u);
 }
 
 }  // namespace

@@ -22,7 +22,8 @@ namespace raylab {
 namespace {
 
 const char* const kOctreeSpecs[] = {"octree", "octree:assign=straddle", "octree:storage=linear",
-                                    "octree:storage=hash", "octree:leaf=1,max_depth=6"};
+                                    "octree:storage=hash", "octree:leaf=1,max_depth=6", "octree:term=count",
+                                    "octree:simd=0"};
 
 // ------------------------------------------------------------ child order
 
@@ -257,6 +258,36 @@ TEST(OctreeBuilder, EveryTriangleIsInEveryLeafItOverlapsAndOnlyThere) {
   EXPECT_GT(leaves, 8u);
 }
 
+// term=sah (the default): a node whose triangles each cross most of its
+// children stays a leaf (eight children would cost more than the list),
+// where term=count with a generous growth limit splits it; well separated
+// triangles are split down to small leaves.
+TEST(OctreeBuilder, SahTerminationKeepsOverlappingListsAndSplitsSeparableOnes) {
+  TriangleMesh planes;
+  Pcg32 rng(9, 4);
+  for (int i = 0; i < 16; ++i) {
+    // Large triangles through the cube's centre, each crossing six octants.
+    const Vec3f n = test::random_direction(rng);
+    const Vec3f u = n.unitOrthogonal(), v = n.cross(u);
+    test::add_triangle(planes, 3.0f * u, -1.5f * u + 2.6f * v, -1.5f * u - 2.6f * v);
+  }
+  OctreeBuildOptions sah;
+  const OctreeTree kept = build_octree(planes, sah);
+  EXPECT_EQ(kept.nodes.size(), 1u);
+  EXPECT_EQ(kept.nodes[0].count(), 16u);
+  OctreeBuildOptions count;
+  count.sah = false;
+  count.max_growth = 8.0;
+  EXPECT_GT(build_octree(planes, count).nodes.size(), 1u);
+
+  const TriangleMesh soup = make_triangle_soup(2000, 6, 0.02f).mesh;
+  const OctreeShape shape = measure_octree(build_octree(soup, sah));
+  EXPECT_GT(shape.inner, 8u);
+  const size_t full_leaves = shape.leaves - shape.empty_leaves;
+  ASSERT_GT(full_leaves, 0u);
+  EXPECT_LT(static_cast<double>(shape.references) / static_cast<double>(full_leaves), 8.0) << shape.max_leaf_size;
+}
+
 TEST(OctreeBuilder, DegenerateInputsStopAtTheDepthLimit) {
   TriangleMesh mesh;
   for (int i = 0; i < 200; ++i) test::add_triangle(mesh, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
@@ -296,7 +327,7 @@ TEST(OctreeLayouts, MemoryFiguresAndIdenticalTrees) {
 
 TEST(OctreeLayouts, LinearOverBudgetFailsClearly) {
   const TriangleMesh mesh = make_triangle_soup(2000, 2).mesh;
-  auto a = make_accelerator("octree:storage=linear,max_depth=8,leaf=1,budget=1");
+  auto a = make_accelerator("octree:storage=linear,max_depth=8,leaf=1,budget=1,term=count");
   EXPECT_THROW(a->build(mesh), std::length_error);
 }
 

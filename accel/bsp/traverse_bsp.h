@@ -8,6 +8,10 @@
 //      denom = n . dir, rel = d - n . org, t = rel / denom,
 //    and the ray's side order from the sign of denom (below = n . x < d is
 //    crossed first when denom > 0).
+//  - Nodes on a fixed 26-DOP diagonal (kBspFixed) do the same with n . org
+//    and 1 / denom computed once per ray for each diagonal the tree uses
+//    (the same float operations on the same stored normal, so the same
+//    values), which makes them as cheap as axis nodes.
 // Robustness: every region is treated as inflated by a margin in space, as in
 // the k-d tree, so the walk visits every leaf the ray passes within that
 // margin. For axis planes it is the k-d tree's delta = 2^-20 M (M bounds
@@ -38,7 +42,27 @@ struct BspView {
   const uint32_t* ids = nullptr;
   Aabb bounds;
   bool empty = true;
+  // The fixed directions and how many of them kBspFixed nodes may use.
+  const Vec3f* fixed_dirs = nullptr;
+  int num_fixed_dirs = 3;
 };
+
+// Per-ray plane constants of a general plane with normal n.
+struct BspPlaneRay {
+  float n_org = 0, inv = 0;
+  uint32_t neg = 0;
+};
+
+inline BspPlaneRay bsp_plane_ray(const float n[3], const Vec3f& org, const Vec3f& dir) {
+  BspPlaneRay p;
+  const float denom = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+  p.n_org = n[0] * org[0] + n[1] * org[1] + n[2] * org[2];
+  p.inv = 1.0f / denom;
+  // A tiny denom whose reciprocal overflows: NaN makes both sides visited.
+  if (denom != 0.0f && std::isinf(p.inv)) p.inv = std::numeric_limits<float>::quiet_NaN();
+  p.neg = std::signbit(denom) ? 1u : 0u;
+  return p;
+}
 
 inline constexpr float kBspGeneralMarginScale = 0x1p-18f;
 
@@ -63,6 +87,8 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
   const float delta_t = std::max(kr.delta_t, delta_g / dir.cwiseAbs().maxCoeff());
   float t0 = kr.t0 - delta_t + kr.delta_t, t1 = kr.t1 + delta_t - kr.delta_t;
   const TrianglePrecompute<kTest> pre(ray);
+  BspPlaneRay fixed[13];
+  for (int k = 3; k < tree.num_fixed_dirs; ++k) fixed[k] = bsp_plane_ray(tree.fixed_dirs[k].data(), org, dir);
 
   struct Entry {
     uint32_t node;
@@ -86,16 +112,13 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
         near = n.index + kr.neg[k];
         far = n.index + 1u - kr.neg[k];
       } else {
-        const float denom = n.n[0] * dir[0] + n.n[1] * dir[1] + n.n[2] * dir[2];
-        const float rel = n.d - (n.n[0] * org[0] + n.n[1] * org[1] + n.n[2] * org[2]);
-        float inv = 1.0f / denom;
-        if (denom != 0.0f && std::isinf(inv)) inv = std::numeric_limits<float>::quiet_NaN();
-        const uint32_t neg = std::signbit(denom) ? 1u : 0u;
-        const float margin = neg ? -delta_g : delta_g;
-        t_near_end = (rel + margin) * inv;
-        t_far_start = (rel - margin) * inv;
-        near = n.index + neg;
-        far = n.index + 1u - neg;
+        const BspPlaneRay p = kind == kBspFixed ? fixed[n.direction()] : bsp_plane_ray(n.n, org, dir);
+        const float rel = n.d - p.n_org;
+        const float margin = p.neg ? -delta_g : delta_g;
+        t_near_end = (rel + margin) * p.inv;
+        t_far_start = (rel - margin) * p.inv;
+        near = n.index + p.neg;
+        far = n.index + 1u - p.neg;
       }
       const bool visit_near = !(t_near_end < t0);
       const bool visit_far = !(t_far_start > t1);

@@ -8,24 +8,21 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/octree/octree_tmp_tree.h"
+
 namespace raylab {
 
 namespace {
 
 constexpr size_t kParallelRefs = 2048;
 
-struct TmpNode {
-  std::vector<uint32_t> refs;
-  std::unique_ptr<std::array<TmpNode, 8>> kids;
-  bool nonempty = false;
-};
 
 class LooseBuilder {
  public:
   LooseBuilder(const LooseOctreeOptions& opt, const LooseBoxes& boxes, const std::vector<Aabb>& tri_boxes)
       : opt_(opt), boxes_(boxes), tri_boxes_(tri_boxes) {}
 
-  void build(TmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
+  void build(OctTmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
     if (ids.size() <= opt_.leaf || level >= opt_.max_depth) {
       n.nonempty = !ids.empty();
       n.refs = std::move(ids);
@@ -53,7 +50,7 @@ class LooseBuilder {
     }
     const size_t total = ids.size();
     std::vector<uint32_t>().swap(ids);
-    n.kids = std::make_unique<std::array<TmpNode, 8>>();
+    n.kids = std::make_unique<std::array<OctTmpNode, 8>>();
     auto build_child = [&](uint32_t ch) {
       const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
                               c[2] + ((ch & 4u) ? half : 0u)};
@@ -64,7 +61,7 @@ class LooseBuilder {
       for (uint32_t ch = 0; ch < 8; ++ch) build_child(ch);
     n.nonempty = !n.refs.empty();
     bool any_child = false;
-    for (const TmpNode& k : *n.kids) any_child = any_child || k.nonempty;
+    for (const OctTmpNode& k : *n.kids) any_child = any_child || k.nonempty;
     n.nonempty = n.nonempty || any_child;
     if (!any_child) n.kids.reset();  // every triangle stayed: a leaf after all
   }
@@ -75,30 +72,6 @@ class LooseBuilder {
   const std::vector<Aabb>& tri_boxes_;
 };
 
-void flatten(const TmpNode& root, OctreeTree& tree) {
-  std::vector<std::pair<const TmpNode*, uint32_t>> stack{{&root, 0u}};
-  tree.nodes.assign(1, OctreeNode{});
-  while (!stack.empty()) {
-    const auto [tmp, index] = stack.back();
-    stack.pop_back();
-    if (tmp->refs.size() > kOctMaxNodeRefs)
-      throw std::length_error(fmt::format("loose_octree: a node holds {} triangles, at most {} supported",
-                                          tmp->refs.size(), kOctMaxNodeRefs));
-    OctreeNode n;
-    n.first_ref = static_cast<uint32_t>(tree.refs.size());
-    tree.refs.insert(tree.refs.end(), tmp->refs.begin(), tmp->refs.end());
-    uint32_t mask = 0;
-    if (tmp->kids) {
-      n.first_child = static_cast<uint32_t>(tree.nodes.size());
-      tree.nodes.resize(tree.nodes.size() + 8);
-      for (uint32_t ch = 0; ch < 8; ++ch)
-        if ((*tmp->kids)[ch].nonempty) mask |= 1u << ch;
-      for (uint32_t ch = 8; ch-- > 0;) stack.emplace_back(&(*tmp->kids)[ch], n.first_child + ch);
-    }
-    n.meta = OctreeNode::make_meta(static_cast<uint32_t>(tmp->refs.size()), mask);
-    tree.nodes[index] = n;
-  }
-}
 
 }  // namespace
 
@@ -122,10 +95,10 @@ OctreeTree build_loose_octree(const TriangleMesh& mesh, const LooseOctreeOptions
   boxes.cube = tree.cube;
   std::vector<uint32_t> ids(n);
   for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
-  TmpNode root;
+  OctTmpNode root;
   const uint32_t origin[3] = {0, 0, 0};
   LooseBuilder(opt, boxes, tri_boxes).build(root, std::move(ids), 0, origin);
-  flatten(root, tree);
+  flatten_octree(root, tree, "loose_octree");
   return tree;
 }
 

@@ -3,7 +3,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <deque>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -16,6 +15,8 @@
 #include "accel/grid/tri_box_overlap.h"
 #include "accel/core/sah_report.h"
 
+#include "accel/octree/octree_tmp_tree.h"
+
 namespace raylab {
 
 namespace {
@@ -26,19 +27,13 @@ constexpr size_t kParallelRefs = 2048;
 // (octree_leaf_blocks.h): 1..4 triangles cost one vector test.
 constexpr size_t kSahBlock = 4;
 
-struct TmpNode {
-  std::vector<uint32_t> refs;
-  std::unique_ptr<std::array<TmpNode, 8>> kids;
-  bool nonempty = false;  // triangles anywhere in the subtree
-};
-
 class OctreeBuilder {
  public:
   OctreeBuilder(const TriangleMesh& mesh, const OctreeBuildOptions& opt, const OctreeCube& cube,
                 const std::vector<Aabb>& boxes)
       : mesh_(mesh), opt_(opt), cube_(cube), boxes_(boxes) {}
 
-  void build(TmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
+  void build(OctTmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
     if (ids.size() <= opt_.leaf || level >= opt_.max_depth) {
       n.nonempty = !ids.empty();
       n.refs = std::move(ids);
@@ -118,7 +113,7 @@ class OctreeBuilder {
     }
     std::vector<uint32_t>().swap(ids);
     n.refs = std::move(stay);
-    n.kids = std::make_unique<std::array<TmpNode, 8>>();
+    n.kids = std::make_unique<std::array<OctTmpNode, 8>>();
     auto build_child = [&](uint32_t ch) {
       const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
                               c[2] + ((ch & 4u) ? half : 0u)};
@@ -130,7 +125,7 @@ class OctreeBuilder {
       for (uint32_t ch = 0; ch < 8; ++ch) build_child(ch);
     }
     n.nonempty = !n.refs.empty();
-    for (const TmpNode& k : *n.kids) n.nonempty = n.nonempty || k.nonempty;
+    for (const OctTmpNode& k : *n.kids) n.nonempty = n.nonempty || k.nonempty;
   }
 
  private:
@@ -140,38 +135,6 @@ class OctreeBuilder {
   const std::vector<Aabb>& boxes_;
 };
 
-// Depth-first into the flat array: the eight children of a node are
-// allocated together, so one index finds all of them, and a child's block
-// follows soon after its parent's (measured on Sponza: breadth-first order
-// left the walk waiting on node loads far more often).
-void flatten(const TmpNode& root, OctreeTree& tree) {
-  std::deque<std::pair<const TmpNode*, uint32_t>> queue{{&root, 0u}};
-  tree.nodes.assign(1, OctreeNode{});
-  while (!queue.empty()) {
-    const auto [tmp, index] = queue.back();
-    queue.pop_back();
-    if (tmp->refs.size() > kOctMaxNodeRefs)
-      throw std::length_error(fmt::format("octree: a node holds {} triangles, at most {} supported", tmp->refs.size(),
-                                          kOctMaxNodeRefs));
-    if (tree.refs.size() + tmp->refs.size() > UINT32_MAX)
-      throw std::length_error("octree: more than 2^32 triangle references");
-    OctreeNode n;
-    n.first_ref = static_cast<uint32_t>(tree.refs.size());
-    tree.refs.insert(tree.refs.end(), tmp->refs.begin(), tmp->refs.end());
-    uint32_t mask = 0;
-    if (tmp->kids) {
-      if (tree.nodes.size() + 8 > UINT32_MAX) throw std::length_error("octree: more than 2^32 nodes");
-      n.first_child = static_cast<uint32_t>(tree.nodes.size());
-      tree.nodes.resize(tree.nodes.size() + 8);
-      for (uint32_t ch = 0; ch < 8; ++ch) {
-        if ((*tmp->kids)[ch].nonempty) mask |= 1u << ch;
-      }
-      for (uint32_t ch = 8; ch-- > 0;) queue.emplace_back(&(*tmp->kids)[ch], n.first_child + ch);
-    }
-    n.meta = OctreeNode::make_meta(static_cast<uint32_t>(tmp->refs.size()), mask);
-    tree.nodes[index] = n;
-  }
-}
 
 }  // namespace
 
@@ -198,10 +161,10 @@ OctreeTree build_octree(const TriangleMesh& mesh, const OctreeBuildOptions& opt)
   tree.cube = octree_cube_around(bounds);
   std::vector<uint32_t> ids(n);
   for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
-  TmpNode root;
+  OctTmpNode root;
   const uint32_t origin[3] = {0, 0, 0};
   OctreeBuilder(mesh, opt, tree.cube, boxes).build(root, std::move(ids), 0, origin);
-  flatten(root, tree);
+  flatten_octree(root, tree, "octree");
   return tree;
 }
 

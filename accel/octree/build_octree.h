@@ -36,8 +36,8 @@ struct OctreeBuildOptions {
   // of its parent's surface, so it is met by 1/4 of the rays that meet the
   // parent): ct + sum_c blocks(n_c) / 4 < blocks(n), in units of one
   // 4-wide triangle block test; ct is the cost of visiting a node.
-  bool sah = false;
-  double ct = 1.0;
+  bool sah = true;
+  double ct = 2.0;
 };
 
 // Throws std::length_error when a node would hold more than kOctMaxNodeRefs

@@ -188,19 +188,27 @@ inline int octree_child_order_scalar(float t0, float t1, const float near_end[3]
   leave = _mm256_min_ps(_mm256_blend_ps(_mm256_set1_ps(near_end[2]), pos_inf, 0xf0), leave);
   uint32_t visit = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(enter, leave, _CMP_LE_OQ))) &
                    oct_mask_in_ray_order(mask, neg_mask);
-  alignas(32) float e0s[8], e1s[8];
-  _mm256_store_ps(e0s, enter);
-  _mm256_store_ps(e1s, leave);
   int n = 0;
   for (; visit != 0; visit &= visit - 1) {
     const uint32_t b = static_cast<uint32_t>(__builtin_ctz(visit));
-    const float e0 = e0s[b];
+#if defined(__AVX2__)
+    // Lane b by a register permute (a vector store and scalar reloads
+    // waited on store forwarding in the profile).
+    const __m256i lane = _mm256_set1_epi32(static_cast<int>(b));
+    const float e0 = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(enter, lane));
+    const float e1 = _mm256_cvtss_f32(_mm256_permutevar8x32_ps(leave, lane));
+#else
+    alignas(32) float e0s[8], e1s[8];
+    _mm256_store_ps(e0s, enter);
+    _mm256_store_ps(e1s, leave);
+    const float e0 = e0s[b], e1 = e1s[b];
+#endif
     int i = n++;
     while (i > 0 && out[i - 1].t0 > e0) {
       out[i] = out[i - 1];
       --i;
     }
-    out[i] = OctChild{b ^ neg_mask, e0, e1s[b]};
+    out[i] = OctChild{b ^ neg_mask, e0, e1};
   }
   return n;
 #else
