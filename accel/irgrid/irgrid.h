@@ -43,13 +43,37 @@ struct Irgrid {
   std::vector<LeafTriangle> tris;
   bool empty = true;
 
+  // The deepest block a walk's last lookup went through. The next voxel of
+  // a walk is a neighbour of the last, usually under the same block, so the
+  // lookup resumes there instead of at the top entry (the same answer: the
+  // block is the voxel map of everything sharing its prefix).
+  struct LookupCache {
+    uint32_t entry = 0;  // the block's inner entry
+    int shift = 0, k = 0;  // k = 0: nothing cached
+    int32_t prefix[3] = {0, 0, 0};  // v >> (shift + k) of the voxels under the block
+  };
+
   // The cell owning virtual voxel v (coordinates inside the virtual grid).
-  [[gnu::always_inline]] uint32_t cell_at(const int32_t v[3]) const {
-    uint32_t e = top_nodes[(v[0] >> depth) * top.stride[0] + (v[1] >> depth) * top.stride[1] +
-                           (v[2] >> depth) * top.stride[2]];
-    for (int shift = depth; e & kIrgridInnerNode;) {
+  [[gnu::always_inline]] uint32_t cell_at(const int32_t v[3], LookupCache& cache) const {
+    uint32_t e;
+    int shift;
+    const int above = cache.shift + cache.k;
+    if (cache.k != 0 && (v[0] >> above) == cache.prefix[0] && (v[1] >> above) == cache.prefix[1] &&
+        (v[2] >> above) == cache.prefix[2]) {
+      e = cache.entry;
+      shift = above;
+    } else {
+      e = top_nodes[(v[0] >> depth) * top.stride[0] + (v[1] >> depth) * top.stride[1] +
+                    (v[2] >> depth) * top.stride[2]];
+      shift = depth;
+    }
+    while (e & kIrgridInnerNode) {
       const int k = static_cast<int>((e >> kIrgridLevelsShift) & 3);
+      cache.entry = e;
+      cache.k = k;
+      for (int a = 0; a < 3; ++a) cache.prefix[a] = v[a] >> shift;
       shift -= k;
+      cache.shift = shift;
       const uint32_t mask = (1u << k) - 1;
       const uint32_t child = ((static_cast<uint32_t>(v[0]) >> shift) & mask) |
                              (((static_cast<uint32_t>(v[1]) >> shift) & mask) << k) |

@@ -38,8 +38,9 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
+    Irgrid::LookupCache cache;
     while (true) {
-      const IrgridCell& c = cells[g.cell_at(v)];
+      const IrgridCell& c = cells[g.cell_at(v, cache)];
       q.rec.count_nodes(1);
       double t_exit = std::numeric_limits<double>::infinity();
       int exit_axis = -1;
