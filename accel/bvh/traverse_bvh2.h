@@ -17,7 +17,6 @@
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/slab_test.h"
-#include "accel/core/traversal_stack.h"
 
 namespace raylab {
 
@@ -33,19 +32,26 @@ inline constexpr int kBvh2StackSize = 192;
 
 // The walk shared by the binary trees (Bvh2Node boxes, SphereNode spheres:
 // nodes with `index` = left child or first triangle, `count` = 0 for inner
-// nodes): `enters(node, bound, t)` tests a node's bounds against [tmin,
-// bound] and gives the entry distance t. The caller's recorder has counted
+// nodes): `enters(node, tmin, bound, t)` tests a node's bounds against
+// [tmin, bound] and gives the entry distance t. The caller's recorder has counted
 // the ray and checked it.
 template <TriangleTest kTest, typename Node, typename Recorder, typename Enters>
 [[gnu::always_inline]] inline Hit walk_binary_bvh(const Node* nodes, const LeafTriangle* tris, const Ray& ray,
                                                   Recorder& rec, Enters&& enters) {
   const TrianglePrecompute<kTest> pre(ray);
+  const float tmin = ray.tmin;
   float bound = pad_far(rec.tmax());
-  EntryDistanceStack<kBvh2StackSize> stack;
+
+  struct Entry {
+    uint32_t node;
+    float t;
+  };
+  Entry stack[kBvh2StackSize];
+  int sp = 0;
 
   float t_root;
   rec.count_nodes(1);
-  if (!enters(nodes[0], bound, t_root)) return rec.hit();
+  if (!enters(nodes[0], tmin, bound, t_root)) return rec.hit();
   uint32_t node = 0;
 
   while (true) {
@@ -58,19 +64,37 @@ template <TriangleTest kTest, typename Node, typename Recorder, typename Enters>
     } else {
       rec.count_nodes(2);
       float tl, tr;
-      const bool hl = enters(nodes[n.index], bound, tl);
-      const bool hr = enters(nodes[n.index + 1], bound, tr);
+      const bool hl = enters(nodes[n.index], tmin, bound, tl);
+      const bool hr = enters(nodes[n.index + 1], tmin, bound, tr);
       if (hl && hr) {
-        node = stack.visit_nearer(n.index, tl, tr);
+        // Both: the nearer now, the farther pushed with its entry distance.
+        uint32_t near = n.index, far = n.index + 1;
+        if (tr < tl) {
+          std::swap(near, far);
+          std::swap(tl, tr);
+        }
+        stack[sp++] = Entry{far, tr};
+        node = near;
         continue;
       }
-      if (hl || hr) {
-        node = hl ? n.index : n.index + 1;
+      if (hl) {
+        node = n.index;
+        continue;
+      }
+      if (hr) {
+        node = n.index + 1;
         continue;
       }
     }
     // Pop the next subtree that can still hold a closer hit.
-    if (!stack.pop_within(bound, node)) return rec.hit();
+    while (true) {
+      if (sp == 0) return rec.hit();
+      const Entry e = stack[--sp];
+      if (e.t <= bound) {
+        node = e.node;
+        break;
+      }
+    }
   }
 }
 
@@ -81,8 +105,8 @@ inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* st
   // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
   const SlabRay sr(ray);
   return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
-                                [&](const Bvh2Node& n, float bound, float& t) __attribute__((always_inline)) {
-                                  return slab_test(sr, n.lo, n.hi, ray.tmin, bound, t);
+                                [&](const Bvh2Node& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
+                                  return slab_test(sr, n.lo, n.hi, tmin, bound, t);
                                 });
 }
 

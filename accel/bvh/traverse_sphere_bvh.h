@@ -84,8 +84,8 @@ inline Hit traverse_sphere_bvh(const SphereBvhView& bvh, const Ray& ray, Travers
   if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
   const float inv_dd = 1.0f / ray.dir.squaredNorm();
   return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
-                                [&](const SphereNode& n, float bound, float& t) __attribute__((always_inline)) {
-                                  return ray_sphere_test(ray, inv_dd, n, ray.tmin, bound, t);
+                                [&](const SphereNode& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
+                                  return ray_sphere_test(ray, inv_dd, n, tmin, bound, t);
                                 });
 }
 

@@ -1,49 +1,11 @@
 #pragma once
-// The explicit stacks of the front-to-back walks, with the step each walk
-// shares: which child to enter, what to push, and which pushed subtree may
+// The explicit stack of the front-to-back interval walks, with the step each
+// walk shares: which child to enter, what to push, and which pushed subtree may
 // still hold a closer hit. The walks themselves (what a node's bounds are,
 // how a leaf is tested) stay with each structure.
 #include <cstdint>
 
 namespace raylab {
-
-// Bounding-volume trees (binary BVH, sphere BVH): subtrees pushed with the
-// distance at which the ray enters their bounds.
-template <int kSize>
-class EntryDistanceStack {
- public:
-  // Both children of `first` (at first, first + 1) are hit, at t_first and
-  // t_second: returns the nearer one to visit now and pushes the farther.
-  [[gnu::always_inline]] uint32_t visit_nearer(uint32_t first, float t_first, float t_second) {
-    if (t_second < t_first) {
-      stack_[sp_++] = Entry{first, t_first};
-      return first + 1;
-    }
-    stack_[sp_++] = Entry{first + 1, t_second};
-    return first;
-  }
-
-  // Pops until a subtree entered no later than `bound` (the padded closest
-  // hit so far) comes up; false when the stack runs empty.
-  [[gnu::always_inline]] bool pop_within(float bound, uint32_t& node) {
-    while (sp_ > 0) {
-      const Entry e = stack_[--sp_];
-      if (e.t <= bound) {
-        node = e.node;
-        return true;
-      }
-    }
-    return false;
-  }
-
- private:
-  struct Entry {
-    uint32_t node;
-    float t;
-  };
-  Entry stack_[kSize];
-  int sp_ = 0;
-};
 
 // Space-partitioning trees (k-d tree, BSP): cells pushed with the ray's
 // interval [t0, t1] inside them (the recursive ray traversal, Jansen 1986;
