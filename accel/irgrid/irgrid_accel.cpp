@@ -83,7 +83,7 @@ AcceleratorInfo irgrid_accelerator_info() {
       }};
   info.caps.mt_variant = "tri=mt";
   info.caps.outline = true;
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:merge=0,expand=0"};
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0"};  // both off: tests/test_irgrid.cpp
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},
                 {"refs", "triangle references in cells"},
