@@ -70,6 +70,14 @@ struct StructureOutline {
     return true;
   }
 
+  // The start most structures share: names the elements and, unless the
+  // structure is empty, draws its root box at depth 0. True when the
+  // structure should go on with depth 1 and below.
+  bool begin(std::string elements, bool structure_empty, const Aabb& root, int max_depth) {
+    what = std::move(elements);
+    return !structure_empty && add(OutlineBox{root, 0, false}) && max_depth >= 1;
+  }
+
   // The quad of the plane x[axis] = pos clipped to `box`.
   static OutlineQuad split_plane(const Aabb& box, int axis, float pos, int depth) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;

@@ -211,6 +211,36 @@ Runner add_bench(CLI::App& app) {
 
 namespace {
 
+// The run's options from the command line (and the rays of --ray-file).
+BenchOptions bench_options_of(const BenchCli& o, const std::vector<RaySet>& file_sets) {
+  BenchOptions bo;
+  bo.ray_sets = parse_name_list(o.ray_sets);
+  bo.threads = parse_thread_list(o.threads);
+  std::tie(bo.width, bo.height) = parse_size(o.size);
+  bo.random_rays = o.random_rays;
+  bo.repeats = o.repeats;
+  bo.build_repeats = o.build_repeats;
+  bo.brute_max_triangles = o.brute_max_tris;
+  bo.seed = o.seed;
+  bo.memory_headroom = o.memory_headroom;
+  bo.given_sets = file_sets;
+  if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
+  return bo;
+}
+
+// The report's header: what ran, with which options.
+nlohmann::json bench_report_header(const BenchCli& o, const std::vector<std::string>& scene_specs,
+                                   const std::vector<std::string>& specs, const BenchOptions& bo) {
+  nlohmann::json header = report_header("bench");
+  header["preset"] = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
+  header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
+                       {"threads", bo.threads},     {"size", o.size},         {"random_rays", bo.random_rays},
+                       {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
+                       {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
+                       {"ray_file", o.ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.ray_file)}};
+  return header;
+}
+
 int run_bench_command(BenchCli& o, const CLI::App& cmd) {
   apply_preset(o, cmd);
   const std::vector<std::string> specs = accel_specs_of(o);
@@ -225,27 +255,9 @@ int run_bench_command(BenchCli& o, const CLI::App& cmd) {
 
   if (o.selfcheck) return run_embree_selfcheck(o, scene_specs, file_sets);
 
-  BenchOptions bo;
-  bo.ray_sets = parse_name_list(o.ray_sets);
-  bo.threads = parse_thread_list(o.threads);
-  std::tie(bo.width, bo.height) = parse_size(o.size);
-  bo.random_rays = o.random_rays;
-  bo.repeats = o.repeats;
-  bo.build_repeats = o.build_repeats;
-  bo.brute_max_triangles = o.brute_max_tris;
-  bo.seed = o.seed;
-  bo.memory_headroom = o.memory_headroom;
-  bo.given_sets = file_sets;
-  if (!file_sets.empty()) bo.ray_sets = {file_sets.front().name};
+  BenchOptions bo = bench_options_of(o, file_sets);
   const std::string csv = !o.csv.empty() ? o.csv : (o.json.empty() ? std::string() : csv_path_for(o.json));
-
-  nlohmann::json header = report_header("bench");
-  header["preset"] = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
-  header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
-                       {"threads", bo.threads},     {"size", o.size},         {"random_rays", bo.random_rays},
-                       {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
-                       {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
-                       {"ray_file", o.ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.ray_file)}};
+  const nlohmann::json header = bench_report_header(o, scene_specs, specs, bo);
   std::vector<BenchRecord> all;
   std::vector<BenchSkip> skipped;
   auto save = [&](bool complete) {

@@ -35,16 +35,109 @@ std::string default_output_name(const std::string& scene_arg) {
   return "out/" + (out.empty() ? std::string("render") : out) + ".png";
 }
 
+struct RenderOpts {
+  std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background, aov;
+  int spp = 64, threads = 0, max_depth = 64;
+  uint64_t seed = 1;
+  bool quiet = false;
+};
+
+// --aov: a per-pixel cost picture of each accelerator instead of a rendering.
+int run_cost_aov(const RenderOpts& o, const std::vector<std::string>& accels) {
+  check_aov_kind(o.aov);
+  AovOptions aov;
+  aov.kind = o.aov;
+  aov.accels = accels;
+  const std::string scene_arg = pick_scene("render", o.scene, o.positional_scene, "cornell");
+  aov.out = o.out;
+  if (aov.out.empty()) {
+    aov.out = default_output_name(scene_arg);
+    aov.out.insert(aov.out.size() - 4, "_" + o.aov);
+  }
+  const std::string ext = lower_extension_of(aov.out);
+  if (ext != ".png" && ext != ".pfm")
+    throw std::invalid_argument(fmt::format("--out {}: --aov writes a .png (with the raw .pfm next to it) or a .pfm", aov.out));
+  if (!o.size.empty()) std::tie(aov.width, aov.height) = parse_size(o.size);
+  if (!o.camera.empty()) {
+    View probe;
+    apply_camera_option(o.camera, probe);
+  }
+  Scene scene = load_scene(scene_arg);
+  if (!o.up.empty()) apply_up_axis(o.up, scene);
+  if (!o.camera.empty()) apply_camera_option(o.camera, scene.view);
+  return render_cost_aov(scene, aov);
+}
+
+// A path-traced image of the scene with one accelerator.
+int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
+  if (accels.size() != 1)
+    throw std::invalid_argument(fmt::format(
+        "render uses one accelerator, '{}' names {} ({}); lists and 'all' are for verify, stress and bench",
+        o.accel, accels.size(), fmt::join(accels, " ")));
+  auto accel = make_accelerator(accels.front());
+  const std::string scene_arg = pick_scene("render", o.scene, o.positional_scene, "cornell");
+  std::string out = o.out.empty() ? default_output_name(scene_arg) : o.out;
+  {
+    const std::string ext = lower_extension_of(out);
+    if (ext != ".png" && ext != ".pfm" && ext != ".exr")
+      throw std::invalid_argument(fmt::format("--out {}: use a .png, .exr or .pfm file name", out));
+  }
+  std::pair<int, int> size{0, 0};
+  if (!o.size.empty()) size = parse_size(o.size);
+  const Vec3f background = o.background.empty() ? Vec3f::Zero() : parse_background(o.background);
+  if (!o.camera.empty()) {
+    View probe;
+    apply_camera_option(o.camera, probe);  // syntax errors before the load
+  }
+
+  Timer load;
+  Scene scene = load_scene(scene_arg);
+  const double load_ms = load.ms();
+  if (!o.up.empty()) apply_up_axis(o.up, scene);
+  if (!o.camera.empty()) apply_camera_option(o.camera, scene.view);
+  if (!o.up.empty() || !o.camera.empty()) aim_key_light(scene);  // keep the light where it was, relative to the camera
+  if (!o.background.empty()) scene.background = background;
+  RenderSettings rs;
+  rs.width = scene.view.width;
+  rs.height = scene.view.height;
+  if (!o.size.empty()) std::tie(rs.width, rs.height) = size;
+  rs.spp = o.spp;
+  rs.seed = o.seed;
+  rs.max_depth = o.max_depth;
+  rs.progress = !o.quiet && stderr_is_terminal();
+  Timer wall;
+  const BuildStats bs = accel->build(scene.mesh);
+  const RenderResult r = render(scene, *accel, rs);
+  const double wall_s = wall.seconds();
+  write_image(r.image, out);
+  const double mrays = (r.rays + r.shadow_rays) / std::max(r.seconds, 1e-9) * 1e-6;
+  std::printf("%s: %zu triangle%s (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
+              scene.name.c_str(), scene.num_triangles(), scene.num_triangles() == 1 ? "" : "s", load_ms,
+              accel->spec().c_str(), bs.build_ms, rs.width, rs.height, rs.spp, r.seconds, mrays, out.c_str());
+  if (!o.json.empty()) {
+    const nlohmann::json rec = {{"scene", scene.name},
+                                {"triangles", scene.num_triangles()},
+                                {"accel", accel->spec()},
+                                {"width", rs.width},
+                                {"height", rs.height},
+                                {"spp", rs.spp},
+                                {"seed", rs.seed},
+                                {"build_ms", bs.build_ms},
+                                {"render_s", r.seconds},
+                                {"wall_s", wall_s},
+                                {"rays", r.rays},
+                                {"shadow_rays", r.shadow_rays},
+                                {"mrays_per_s", mrays},
+                                {"image", out}};
+    write_json_report(o.json, report_header("render"), nlohmann::json::array({rec}));
+  }
+  return 0;
+}
+
 }  // namespace
 
 Runner add_render(CLI::App& app) {
-  struct Opts {
-    std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background, aov;
-    int spp = 64, threads = 0, max_depth = 64;
-    uint64_t seed = 1;
-    bool quiet = false;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<RenderOpts>();
   CLI::App* cmd = app.add_subcommand("render", "path-trace a scene to PNG, EXR or PFM");
   add_scene_options(cmd, o->positional_scene, o->scene,
                     "the scene: procedural spec, mesh file or JSON scene file (default cornell; see raylab scenes)");
@@ -73,92 +166,7 @@ Runner add_render(CLI::App& app) {
       limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
     // Check every argument before loading a possibly large scene.
     const auto accels = expand_accelerator_list(o->accel);
-    if (!o->aov.empty()) {
-      check_aov_kind(o->aov);
-      AovOptions aov;
-      aov.kind = o->aov;
-      aov.accels = accels;
-      const std::string scene_arg = pick_scene("render", o->scene, o->positional_scene, "cornell");
-      aov.out = o->out;
-      if (aov.out.empty()) {
-        aov.out = default_output_name(scene_arg);
-        aov.out.insert(aov.out.size() - 4, "_" + o->aov);
-      }
-      const std::string ext = lower_extension_of(aov.out);
-      if (ext != ".png" && ext != ".pfm")
-        throw std::invalid_argument(fmt::format("--out {}: --aov writes a .png (with the raw .pfm next to it) or a .pfm", aov.out));
-      if (!o->size.empty()) std::tie(aov.width, aov.height) = parse_size(o->size);
-      if (!o->camera.empty()) {
-        View probe;
-        apply_camera_option(o->camera, probe);
-      }
-      Scene scene = load_scene(scene_arg);
-      if (!o->up.empty()) apply_up_axis(o->up, scene);
-      if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
-      return render_cost_aov(scene, aov);
-    }
-    if (accels.size() != 1)
-      throw std::invalid_argument(fmt::format(
-          "render uses one accelerator, '{}' names {} ({}); lists and 'all' are for verify, stress and bench",
-          o->accel, accels.size(), fmt::join(accels, " ")));
-    auto accel = make_accelerator(accels.front());
-    const std::string scene_arg = pick_scene("render", o->scene, o->positional_scene, "cornell");
-    std::string out = o->out.empty() ? default_output_name(scene_arg) : o->out;
-    {
-      const std::string ext = lower_extension_of(out);
-      if (ext != ".png" && ext != ".pfm" && ext != ".exr")
-        throw std::invalid_argument(fmt::format("--out {}: use a .png, .exr or .pfm file name", out));
-    }
-    std::pair<int, int> size{0, 0};
-    if (!o->size.empty()) size = parse_size(o->size);
-    const Vec3f background = o->background.empty() ? Vec3f::Zero() : parse_background(o->background);
-    if (!o->camera.empty()) {
-      View probe;
-      apply_camera_option(o->camera, probe);  // syntax errors before the load
-    }
-
-    Timer load;
-    Scene scene = load_scene(scene_arg);
-    const double load_ms = load.ms();
-    if (!o->up.empty()) apply_up_axis(o->up, scene);
-    if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
-    if (!o->up.empty() || !o->camera.empty()) aim_key_light(scene);  // keep the light where it was, relative to the camera
-    if (!o->background.empty()) scene.background = background;
-    RenderSettings rs;
-    rs.width = scene.view.width;
-    rs.height = scene.view.height;
-    if (!o->size.empty()) std::tie(rs.width, rs.height) = size;
-    rs.spp = o->spp;
-    rs.seed = o->seed;
-    rs.max_depth = o->max_depth;
-    rs.progress = !o->quiet && stderr_is_terminal();
-    Timer wall;
-    const BuildStats bs = accel->build(scene.mesh);
-    const RenderResult r = render(scene, *accel, rs);
-    const double wall_s = wall.seconds();
-    write_image(r.image, out);
-    const double mrays = (r.rays + r.shadow_rays) / std::max(r.seconds, 1e-9) * 1e-6;
-    std::printf("%s: %zu triangle%s (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
-                scene.name.c_str(), scene.num_triangles(), scene.num_triangles() == 1 ? "" : "s", load_ms,
-                accel->spec().c_str(), bs.build_ms, rs.width, rs.height, rs.spp, r.seconds, mrays, out.c_str());
-    if (!o->json.empty()) {
-      const nlohmann::json rec = {{"scene", scene.name},
-                                  {"triangles", scene.num_triangles()},
-                                  {"accel", accel->spec()},
-                                  {"width", rs.width},
-                                  {"height", rs.height},
-                                  {"spp", rs.spp},
-                                  {"seed", rs.seed},
-                                  {"build_ms", bs.build_ms},
-                                  {"render_s", r.seconds},
-                                  {"wall_s", wall_s},
-                                  {"rays", r.rays},
-                                  {"shadow_rays", r.shadow_rays},
-                                  {"mrays_per_s", mrays},
-                                  {"image", out}};
-      write_json_report(o->json, report_header("render"), nlohmann::json::array({rec}));
-    }
-    return 0;
+    return o->aov.empty() ? run_render(*o, accels) : run_cost_aov(*o, accels);
   };
 }
 

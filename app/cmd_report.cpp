@@ -26,6 +26,15 @@ namespace raylab::cli {
 
 namespace {
 
+// A bar chart with its element id, title and axis label (rows added later).
+BarChart bar_chart(std::string id, std::string title, std::string x_label) {
+  BarChart c;
+  c.id = std::move(id);
+  c.title = std::move(title);
+  c.x_label = std::move(x_label);
+  return c;
+}
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -286,13 +295,10 @@ void memory_and_build(Doc& doc, const std::vector<json>& recs) {
            "break-even: how many rays (of the first ray set, one thread) a structure must trace before its build plus "
            "trace time is below Embree's, on the largest scene (a model from the measured build time and speed, "
            "t = build + rays / speed, not a measurement).");
-  BarChart mem, build;
-  mem.id = "chart-memory";
-  mem.title = "Memory: bytes per triangle";
-  mem.x_label = "bytes per triangle (geometric mean over scenes)";
-  build.id = "chart-build";
-  build.title = "Build time per triangle";
-  build.x_label = "ns per triangle (median build, geometric mean over scenes)";
+  BarChart mem = bar_chart("chart-memory", "Memory: bytes per triangle",
+                           "bytes per triangle (geometric mean over scenes)");
+  BarChart build = bar_chart("chart-build", "Build time per triangle",
+                             "ns per triangle (median build, geometric mean over scenes)");
   // The largest scene and the first ray set, for the break-even.
   std::string largest;
   double most = -1;
@@ -439,13 +445,8 @@ void why(Doc& doc, const std::vector<json>& recs) {
     tris[a].push_back(num(r, "tris_per_ray"));
     ns[a].push_back(1e3 / num(r, "mrays_per_s"));
   }
-  BarChart cn, ct;
-  cn.id = "chart-nodes-per-ray";
-  cn.title = "Nodes or cells visited per ray";
-  cn.x_label = "per ray (geometric mean)";
-  ct.id = "chart-tris-per-ray";
-  ct.title = "Triangle tests per ray";
-  ct.x_label = "per ray (geometric mean)";
+  BarChart cn = bar_chart("chart-nodes-per-ray", "Nodes or cells visited per ray", "per ray (geometric mean)");
+  BarChart ct = bar_chart("chart-tris-per-ray", "Triangle tests per ray", "per ray (geometric mean)");
   std::vector<std::vector<std::string>> table;
   for (const auto& a : accels) {
     const double n = geomean(nodes[a]), t = geomean(tris[a]), time = geomean(ns[a]);

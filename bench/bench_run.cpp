@@ -82,6 +82,104 @@ Built build_accel(const std::string& spec, const Scene& scene, int repeats) {
   return b;
 }
 
+// A structure fits when its estimated peak is below the headroom share of
+// what the OS can still give this process (a Slurm job's cgroup included).
+struct MemoryCheck {
+  size_t triangles;
+  double headroom;
+  size_t estimate = 0, available = 0;  // of the last check
+
+  bool fits(const std::string& spec, size_t extra_room) {
+    estimate = estimate_build_peak_bytes(spec, triangles);
+    available = available_memory_bytes();
+    return headroom <= 0 || static_cast<double>(estimate) <= headroom * static_cast<double>(available + extra_room);
+  }
+  std::string needs() const {
+    return fmt::format("needs ~{} by its estimate, {} available", format_gib(static_cast<double>(estimate)),
+                       format_gib(static_cast<double>(available)));
+  }
+};
+
+// The fastest Embree mode so far per (set, threads): its ratio to the
+// reference, its spec and speed; every record's best-mode figures.
+class BestEmbreeModes {
+ public:
+  void note(const BenchRecord& r, size_t set, bool embree_mode, const std::string& reference) {
+    const std::pair<size_t, int> key{set, r.threads};
+    // The reference counts as measured (ratio 1) even when not in the list.
+    if (!best_.count(key)) best_[key] = Mode{1.0, reference, r.embree_mrays_per_s};
+    Mode& cur = best_[key];
+    if (embree_mode && r.ratio_to_embree > cur.ratio) cur = Mode{r.ratio_to_embree, r.accel, r.mrays_per_s};
+  }
+  void fill(BenchRecord& r, size_t set) const {
+    const auto it = best_.find({set, r.threads});
+    if (it == best_.end() || !(it->second.ratio > 0)) return;
+    r.best_embree = it->second.spec;
+    r.best_embree_mrays_per_s = it->second.mrays_per_s;
+    r.ratio_to_best_embree = r.ratio_to_embree / it->second.ratio;
+  }
+
+ private:
+  struct Mode {
+    double ratio = 0.0;
+    std::string spec;
+    double mrays_per_s = 0.0;
+  };
+  std::map<std::pair<size_t, int>, Mode> best_;
+};
+
+// The accelerator's and the reference's timing of one (set, threads) cell.
+struct TimedPair {
+  TraceTiming accel, embree;
+};
+
+// One record of the matrix: the structure's build figures, its timing
+// against the reference's, the agreement and the per-ray counters.
+BenchRecord make_record(const std::string& scene, size_t triangles, const Built& b, const RaySet& set, int threads,
+                        const PreparedSet& prep, const TimedPair& timing, double agree, const TraversalStats& ts) {
+  BenchRecord r;
+  r.scene = scene;
+  r.triangles = triangles;
+  r.accel = b.spec;
+  r.ray_set = set.name;
+  r.threads = threads;
+  r.rays = set.rays.size();
+  r.build_ms = b.stats.build_ms;
+  r.bytes = b.stats.bytes;
+  r.prepare_ms = prep.prepare_s * 1e3;
+  r.mrays_per_s = timing.accel.mrays_per_s(r.rays);
+  r.mrays_min = timing.accel.max_s > 0 ? r.rays / timing.accel.max_s * 1e-6 : 0;
+  r.mrays_max = timing.accel.min_s > 0 ? r.rays / timing.accel.min_s * 1e-6 : 0;
+  r.embree_mrays_per_s = timing.embree.mrays_per_s(r.rays);
+  r.ratio_to_embree = r.embree_mrays_per_s > 0 ? r.mrays_per_s / r.embree_mrays_per_s : 0;
+  r.embree_agreement = agree;
+  r.nodes_per_ray = r.tris_per_ray = std::numeric_limits<double>::quiet_NaN();
+  // A structure without counters (Embree) leaves them at zero: n/a, not 0.
+  if (ts.rays && (ts.nodes_visited > 0 || ts.triangle_tests > 0)) {
+    r.nodes_per_ray = static_cast<double>(ts.nodes_visited) / ts.rays;
+    r.tris_per_ray = static_cast<double>(ts.triangle_tests) / ts.rays;
+  }
+  r.sah_cost = b.stats.sah_cost;
+  r.nodes = b.stats.nodes;
+  r.leaves = b.stats.leaves;
+  r.max_depth = b.stats.max_depth;
+  r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
+  r.trace_s = timing.accel.repeat_s;
+  r.extra = b.stats.extra;
+  return r;
+}
+
+// The given ray sets, or those named in the options made on `reference`.
+std::vector<RaySet> bench_ray_sets(const Scene& scene, const BenchOptions& o, const Accelerator& reference) {
+  if (!o.given_sets.empty()) return o.given_sets;
+  RaySetOptions rso;
+  rso.width = o.width;
+  rso.height = o.height;
+  rso.random_count = o.random_rays;
+  rso.seed = o.seed;
+  return make_ray_sets(scene, o.ray_sets, reference, rso);
+}
+
 }  // namespace
 
 std::vector<std::string> bench_specs_for_scene(const std::vector<std::string>& accel_specs, size_t triangles,
@@ -112,28 +210,15 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   auto stopped = [&] { return o.stop && o.stop->load(); };
   const size_t triangles = scene.num_triangles();
   const std::vector<std::string> accel_specs = bench_specs_for_scene(all_specs, triangles, o);
-  // A structure fits when its estimated peak is below the headroom share of
-  // what the OS can still give this process (a Slurm job's cgroup included).
-  auto fits = [&](const std::string& spec, size_t extra_room, size_t& estimate, size_t& available) {
-    estimate = estimate_build_peak_bytes(spec, triangles);
-    available = available_memory_bytes();
-    return o.memory_headroom <= 0 ||
-           static_cast<double>(estimate) <= o.memory_headroom * static_cast<double>(available + extra_room);
-  };
+  MemoryCheck mem{triangles, o.memory_headroom};
   auto skip = [&](const std::string& spec, const std::string& reason, size_t estimate, size_t available) {
     std::fprintf(stderr, "bench: %s on %s: skipped: %s\n", spec.c_str(), scene.name.c_str(), reason.c_str());
     if (on_skip) on_skip(BenchSkip{scene.name, spec, reason, triangles, estimate, available});
   };
-  auto needs = [](size_t estimate, size_t available) {
-    return fmt::format("needs ~{} by its estimate, {} available", format_gib(static_cast<double>(estimate)),
-                       format_gib(static_cast<double>(available)));
-  };
-
-  size_t estimate = 0, available = 0;
-  if (!fits(o.embree_spec, 0, estimate, available)) {
+  if (!mem.fits(o.embree_spec, 0)) {
     // Without the reference nothing can be timed: every structure is skipped.
-    const std::string reason = "the Embree reference " + needs(estimate, available);
-    for (const auto& spec : accel_specs) skip(spec, reason, estimate, available);
+    const std::string reason = "the Embree reference " + mem.needs();
+    for (const auto& spec : accel_specs) skip(spec, reason, mem.estimate, mem.available);
     return {};
   }
   say("building embree (reference)");
@@ -142,15 +227,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   Built embree = build_accel(o.embree_spec, scene, o.build_repeats);
   const size_t embree_resident = resident_bytes() > rss_before_embree ? resident_bytes() - rss_before_embree : 0;
 
-  std::vector<RaySet> sets = o.given_sets;
-  if (sets.empty()) {
-    RaySetOptions rso;
-    rso.width = o.width;
-    rso.height = o.height;
-    rso.random_count = o.random_rays;
-    rso.seed = o.seed;
-    sets = make_ray_sets(scene, o.ray_sets, *embree.accel, rso);
-  }
+  const std::vector<RaySet> sets = bench_ray_sets(scene, o, *embree.accel);
 
   // The reference's prepared sets (made once), its answers for agreement.
   std::vector<PreparedSet> embree_prepared(sets.size());
@@ -169,18 +246,9 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   };
 
   std::vector<BenchRecord> records;
-  // The fastest Embree mode so far per (set, threads): its ratio to the reference and spec.
-  std::map<std::pair<size_t, int>, std::pair<double, std::string>> best;
-  std::map<std::pair<size_t, int>, double> best_mrays;
+  BestEmbreeModes best;
   size_t embree_modes_left = 0;
   for (const auto& spec : accel_specs) embree_modes_left += is_reference_spec(spec);
-  auto fill_best = [&](BenchRecord& r, size_t s) {
-    const auto it = best.find({s, r.threads});
-    if (it == best.end() || !(it->second.first > 0)) return;
-    r.best_embree = it->second.second;
-    r.best_embree_mrays_per_s = best_mrays[{s, r.threads}];
-    r.ratio_to_best_embree = r.ratio_to_embree / it->second.first;
-  };
   std::vector<size_t> record_set;  // set index of each record
   for (const auto& spec : accel_specs) {
     if (stopped()) break;
@@ -191,17 +259,17 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
     }
     size_t rss_before_build = rss_before_embree;
     if (!is_embree) {
-      if (!fits(spec, 0, estimate, available)) {
-        if (embree.accel && fits(spec, embree_resident, estimate, available)) {
+      if (!mem.fits(spec, 0)) {
+        if (embree.accel && mem.fits(spec, embree_resident)) {
           // Fits once Embree's memory is returned: time Embree on every
           // (set, threads) now, keep its answers, release it.
           for (size_t s = 0; s < sets.size(); ++s)
             for (int threads : o.threads) embree_timed_first[{s, threads}] = embree_timing(s, threads);
           embree.accel.reset();
           std::fprintf(stderr, "bench: %s on %s: %s; Embree timed first and released\n", spec.c_str(),
-                       scene.name.c_str(), needs(estimate, available).c_str());
+                       scene.name.c_str(), mem.needs().c_str());
         } else {
-          skip(spec, needs(estimate, available), estimate, available);
+          skip(spec, mem.needs(), mem.estimate, mem.available);
           continue;
         }
       }
@@ -214,14 +282,14 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       b = is_embree ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
     } catch (const std::bad_alloc&) {
       // The estimate was too low: still a record of why, not a crash.
-      skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_gib(static_cast<double>(estimate))),
-           estimate, available_memory_bytes());
+      skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_gib(static_cast<double>(mem.estimate))),
+           mem.estimate, available_memory_bytes());
       continue;
     } catch (const std::exception& e) {
       // A structure that cannot be built on this scene (e.g. a grid whose memory
       // budget cannot hold 10^8 triangles' references): a record of why, and the
       // rest of the matrix still runs. Specs were validated before the scene loaded.
-      skip(spec, fmt::format("build failed: {}", e.what()), estimate, available_memory_bytes());
+      skip(spec, fmt::format("build failed: {}", e.what()), mem.estimate, available_memory_bytes());
       continue;
     }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;
@@ -247,52 +315,13 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
         // (unless Embree had to go first to make room).
         const TraceTiming et = embree_timing(s, threads);
         const TraceTiming t = is_reference ? et : time_trace(accel, set, threads, o.repeats, prep.rays.get());
-        BenchRecord r;
-        r.scene = scene.name;
-        r.triangles = triangles;
-        r.accel = b.spec;
-        r.ray_set = set.name;
-        r.threads = threads;
-        r.rays = set.rays.size();
-        r.build_ms = b.stats.build_ms;
-        r.bytes = b.stats.bytes;
-        r.prepare_ms = prep.prepare_s * 1e3;
-        r.mrays_per_s = t.mrays_per_s(r.rays);
-        r.mrays_min = t.max_s > 0 ? r.rays / t.max_s * 1e-6 : 0;
-        r.mrays_max = t.min_s > 0 ? r.rays / t.min_s * 1e-6 : 0;
-        r.embree_mrays_per_s = et.mrays_per_s(r.rays);
-        r.ratio_to_embree = r.embree_mrays_per_s > 0 ? r.mrays_per_s / r.embree_mrays_per_s : 0;
-        r.embree_agreement = agree;
-        r.nodes_per_ray = r.tris_per_ray = std::numeric_limits<double>::quiet_NaN();
-        // A structure without counters (Embree) leaves them at zero: n/a, not 0.
-        if (ts.rays && (ts.nodes_visited > 0 || ts.triangle_tests > 0)) {
-          r.nodes_per_ray = static_cast<double>(ts.nodes_visited) / ts.rays;
-          r.tris_per_ray = static_cast<double>(ts.triangle_tests) / ts.rays;
-        }
-        r.sah_cost = b.stats.sah_cost;
-        r.nodes = b.stats.nodes;
-        r.leaves = b.stats.leaves;
-        r.max_depth = b.stats.max_depth;
-        r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
-        r.trace_s = t.repeat_s;
-        r.extra = b.stats.extra;
+        BenchRecord r = make_record(scene.name, triangles, b, set, threads, prep, TimedPair{t, et}, agree, ts);
         if (!embree_timed_first.empty()) r.extra["embree_timed_first"] = 1;
         r.rss_before_build_bytes = rss_before_build;
         r.rss_peak_bytes = peak_resident_bytes();
-        // The reference counts as measured (ratio 1) even when not in the list.
-        if (!best.count({s, threads})) {
-          best[{s, threads}] = {1.0, embree.spec};
-          best_mrays[{s, threads}] = r.embree_mrays_per_s;
-        }
-        if (embree_mode) {
-          auto& cur = best[{s, threads}];
-          if (r.ratio_to_embree > cur.first) {
-            cur = {r.ratio_to_embree, r.accel};
-            best_mrays[{s, threads}] = r.mrays_per_s;
-          }
-        }
+        best.note(r, s, embree_mode, embree.spec);
         // Embree modes get their best-mode figures once all of them ran (below).
-        if (!embree_mode || embree_modes_left == 1) fill_best(r, s);
+        if (!embree_mode || embree_modes_left == 1) best.fill(r, s);
         records.push_back(r);
         record_set.push_back(s);
         if (on_record) on_record(r);
@@ -300,7 +329,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
     }
     if (embree_mode && embree_modes_left > 0) --embree_modes_left;
   }
-  for (size_t i = 0; i < records.size(); ++i) fill_best(records[i], record_set[i]);
+  for (size_t i = 0; i < records.size(); ++i) best.fill(records[i], record_set[i]);
   return records;
 }
 

@@ -181,6 +181,63 @@ OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_
   return oracle_triangle_exact(p0, p1, p2, ray);
 }
 
+namespace {
+
+// Whether the segment [tmin, tmax] of a ray comes near `box` (padded by
+// 1e-6 of its coordinates): a ray lying in (or within rounding of) a
+// triangle's plane grazes the triangle when it does.
+bool segment_near_box(const RayD& rd, double tmin, double tmax, const Aabb& box) {
+  double t0 = tmin, t1 = tmax;
+  for (int a = 0; a < 3; ++a) {
+    const double pad = 1e-6 * std::max(1.0, std::fabs(static_cast<double>(box.hi[a])) + std::fabs(static_cast<double>(box.lo[a])));
+    const double lo = box.lo[a] - pad, hi = box.hi[a] + pad;
+    if (rd.d[a] == 0.0) {
+      if (!(rd.o[a] >= lo && rd.o[a] <= hi)) return false;
+    } else {
+      double ta = (lo - rd.o[a]) / rd.d[a], tb = (hi - rd.o[a]) / rd.d[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      if (!(t0 <= t1)) return false;
+    }
+  }
+  return true;
+}
+
+// The nearest of the candidates: by the double distances, exactly where
+// their error bands overlap (ties to the lower primitive id). Notes exact
+// arithmetic and exact ties in `best`.
+size_t nearest_candidate(const TriangleMesh& mesh, const Ray& ray, std::vector<Candidate>& cands, OracleHit& best) {
+  auto exact_t = [&](Candidate& c) -> const mpq_class& {
+    if (!c.exact_t) {
+      best.exact_used = true;
+      const uint32_t p = c.prim;
+      c.exact_t = exact_eval(mesh.vertex(p, 0), mesh.vertex(p, 1), mesh.vertex(p, 2), ray).t;
+    }
+    return *c.exact_t;
+  };
+  size_t bi = 0;
+  for (size_t k = 1; k < cands.size(); ++k)
+    if (cands[k].t < cands[bi].t) bi = k;
+  for (size_t k = 0; k < cands.size(); ++k) {
+    if (k == bi) continue;
+    Candidate& c = cands[k];
+    Candidate& b = cands[bi];
+    if (c.t - c.err > b.t + b.err) continue;
+    const int order = ::cmp(exact_t(c), exact_t(b));
+    if (order < 0) {
+      bi = k;
+      best.exact_tie = false;
+    } else if (order == 0) {
+      best.exact_tie = true;
+      if (c.prim < b.prim) bi = k;
+    }
+  }
+  return bi;
+}
+
+}  // namespace
+
 OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol) {
   OracleHit best;
   if (!ray_is_valid(ray)) return best;
@@ -200,23 +257,7 @@ OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double gr
       if (all_small) {
         // Lying in (or within rounding of) the plane: grazing if the segment
         // comes near the triangle's bounds.
-        Aabb box = mesh.triangle_bounds(i);
-        double t0 = tmin, t1 = tmax;
-        bool overlaps = true;
-        for (int a = 0; a < 3 && overlaps; ++a) {
-          const double pad = 1e-6 * std::max(1.0, std::fabs(static_cast<double>(box.hi[a])) + std::fabs(static_cast<double>(box.lo[a])));
-          const double lo = box.lo[a] - pad, hi = box.hi[a] + pad;
-          if (rd.d[a] == 0.0) {
-            overlaps = rd.o[a] >= lo && rd.o[a] <= hi;
-          } else {
-            double ta = (lo - rd.o[a]) / rd.d[a], tb = (hi - rd.o[a]) / rd.d[a];
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-            overlaps = t0 <= t1;
-          }
-        }
-        if (overlaps) best.grazing = true;
+        if (segment_near_box(rd, tmin, tmax, mesh.triangle_bounds(i))) best.grazing = true;
       }
     }
     if (std::isfinite(d.t) && near_range && std::fabs(d.margin) < graze_tol) best.grazing = true;
@@ -247,40 +288,12 @@ OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double gr
   }
   if (cands.empty()) return best;
 
-  // Nearest: by the double distances, exactly where their error bands overlap.
-  auto exact_t = [&](Candidate& c) -> const mpq_class& {
-    if (!c.exact_t) {
-      best.exact_used = true;
-      const uint32_t p = c.prim;
-      c.exact_t = exact_eval(mesh.vertex(p, 0), mesh.vertex(p, 1), mesh.vertex(p, 2), ray).t;
-    }
-    return *c.exact_t;
-  };
-  size_t bi = 0;
-  for (size_t k = 1; k < cands.size(); ++k)
-    if (cands[k].t < cands[bi].t) bi = k;
-  for (size_t k = 0; k < cands.size(); ++k) {
-    if (k == bi) continue;
-    Candidate& c = cands[k];
-    Candidate& b = cands[bi];
-    if (c.t - c.err > b.t + b.err) continue;
-    const int order = ::cmp(exact_t(c), exact_t(b));
-    if (order < 0) {
-      bi = k;
-      best.exact_tie = false;
-    } else if (order == 0) {
-      best.exact_tie = true;
-      if (c.prim < b.prim) bi = k;
-    }
-  }
+  const size_t bi = nearest_candidate(mesh, ray, cands, best);
   best.valid = true;
   best.t = cands[bi].t;
   best.prim = cands[bi].prim;
   return best;
 }
-
-namespace {
-}  // namespace
 
 bool same_distance(double a, double b, double tol) {
   return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30});

@@ -10,16 +10,12 @@
 
 namespace raylab {
 
-namespace {
-
 using namespace library;
-
-}  // namespace
 
 SceneGenerator city_generator() {
   return {"city", "n x n blocks of buildings (log-normal heights), roof units and cars: boxes of very different sizes",
           {{"n", "16", "blocks per side"},
-           {"seed", "1", "random seed"},
+           seed_param(),
            {"cars", "12", "cars per block"},
            {"tall", "1", "height scale of the buildings"}},
           [](const Params& p) {

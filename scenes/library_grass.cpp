@@ -9,16 +9,12 @@
 
 namespace raylab {
 
-namespace {
-
 using namespace library;
-
-}  // namespace
 
 SceneGenerator grass_generator() {
   return {"grass", "thin curved grass blades on a 2x2 patch: n (2 segments - 1) + 2 triangles",
           {{"n", "30000", "number of blades"},
-           {"seed", "1", "random seed"},
+           seed_param(),
            {"segments", "4", "segments per blade (triangles per blade: 2 segments - 1)"},
            {"height", "0.12", "mean blade height (the patch is 2 wide)"},
            {"width", "0.006", "blade width at the root"}},

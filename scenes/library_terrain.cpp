@@ -43,7 +43,7 @@ float value_noise(uint64_t seed, int octave, float x, float z) {
 SceneGenerator terrain_generator() {
   return {"terrain", "fractal height field (fBm value noise) on [-1,1]^2 with lakes: 2 n^2 triangles",
           {{"n", "256", "grid cells per side"},
-           {"seed", "1", "random seed"},
+           seed_param(),
            {"octaves", "8", "noise octaves (detail levels)"},
            {"roughness", "0.5", "amplitude ratio between octaves (0..1): higher is rougher"},
            {"height", "0.35", "height of the relief relative to the width 2"}},

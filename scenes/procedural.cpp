@@ -48,7 +48,7 @@ const std::vector<SceneGenerator>& scene_generators() {
        [](const Params&) { return make_cornell_box(); }},
       {"soup", "random triangles in the unit cube",
        {{"n", "10000", "number of triangles"},
-        {"seed", "1", "random seed"},
+        seed_param(),
         {"size", "1", "triangle extent relative to the mean spacing"}},
        [](const Params& p) {
          const int n = p.integer("n");
@@ -70,7 +70,7 @@ const std::vector<SceneGenerator>& scene_generators() {
        {{"n", "1000", "random triangles"},
         {"grid", "16", "quads per side of the regular grid (0 = none)"},
         {"axis", "2", "normal axis of the plane: 0, 1 or 2"},
-        {"seed", "1", "random seed"}},
+        seed_param()},
        [](const Params& p) {
          const int n = p.integer("n"), grid = p.integer("grid"), axis = p.integer("axis");
          if (n < 0 || n > 50'000'000) throw SpecError("coplanar: n must be in 0..5e7");

@@ -19,6 +19,9 @@ struct SceneGenerator {
 
 const std::vector<SceneGenerator>& scene_generators();
 
+// The `seed` parameter every random generator declares.
+inline ParamInfo seed_param() { return ParamInfo{"seed", "1", "random seed"}; }
+
 // The Cornell box from Cornell's published measurements (millimetres): two
 // white blocks, a red wall on the camera's left, a green one on its right,
 // and the area light just below the ceiling; with the published camera.

@@ -3,55 +3,14 @@
 // watertight kernel on the same triangles, so a missed cell or node shows up
 // as a different distance (compared bit for bit), and the triangle may
 // differ only at exactly equal distances.
-#include <cstdio>
+#include <gtest/gtest.h>
+
 #include <span>
-#include <string>
 #include <vector>
 
-#include "accel/registry.h"
-#include "base/pcg.h"
-#include "tests/test_util.h"
+#include "tests/brute_agreement.h"
 
 namespace raylab::test {
-
-inline void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-  const auto base = static_cast<uint32_t>(m.vertices.size());
-  m.vertices.insert(m.vertices.end(), {a, b, c});
-  m.triangles.push_back({base, base + 1, base + 2});
-}
-
-// Rays whose closest hit, occlusion or instrumented-kernel answer differs
-// from brute force; `first` describes the first.
-inline size_t count_brute_mismatches(const Accelerator& accel, const TriangleMesh& mesh, std::span<const Ray> rays,
-                                     std::string* first = nullptr) {
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  const size_t n = rays.size();
-  std::vector<Hit> ref(n), a(n), c(n);
-  std::vector<uint8_t> oref(n), oa(n);
-  brute->intersect(rays, ref);
-  brute->occluded(rays, oref);
-  accel.intersect(rays, a);
-  TraversalStats st;
-  accel.intersect(rays, c, &st);
-  accel.occluded(rays, oa);
-  size_t bad = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const bool same = a[i].valid() == ref[i].valid() && (!a[i].valid() || a[i].t == ref[i].t);
-    const bool same_counted = c[i].valid() == a[i].valid() && c[i].t == a[i].t && c[i].prim == a[i].prim;
-    if (same && same_counted && oa[i] == oref[i]) continue;
-    if (bad++ == 0 && first) {
-      char buf[400];
-      const Ray& r = rays[i];
-      std::snprintf(buf, sizeof(buf),
-                    "org (%a %a %a) dir (%a %a %a) t [%a %a] -> (%d, t %a) brute (%d, t %a) occluded %d brute %d",
-                    r.org.x(), r.org.y(), r.org.z(), r.dir.x(), r.dir.y(), r.dir.z(), r.tmin, r.tmax, a[i].valid(),
-                    a[i].t, ref[i].valid(), ref[i].t, oa[i], oref[i]);
-      *first = buf;
-    }
-  }
-  return bad;
-}
 
 // Rays aimed at points of the mesh's triangles (interior, edges, vertices)
 // from random directions, plus random rays through the box.
@@ -89,6 +48,19 @@ inline std::vector<Ray> secondary_rays(const TriangleMesh& mesh, std::span<const
   for (size_t i = 0; i < primary.size(); ++i)
     if (hits[i].valid()) rays.emplace_back(primary[i].at(hits[i].t), random_direction(rng), 0.0f);
   return rays;
+}
+
+// Each spec's structure agrees with brute force on every ray set given.
+inline void expect_specs_agree_with_brute(std::span<const char* const> specs, const TriangleMesh& mesh,
+                                          std::initializer_list<std::span<const Ray>> ray_sets) {
+  for (const char* spec : specs) {
+    auto a = make_accelerator(spec);
+    a->build(mesh);
+    for (const auto& rays : ray_sets) {
+      std::string first;
+      EXPECT_EQ(count_brute_mismatches(*a, mesh, rays, &first), 0u) << spec << ": " << first;
+    }
+  }
 }
 
 }  // namespace raylab::test

@@ -103,13 +103,7 @@ TEST(Bsp, AgreesWithBruteForceAtVerticesEdgesAndFromSurfaces) {
   const TriangleMesh mesh = tilted_scene();
   const auto rays = test::rays_at_triangles(mesh, 1500, 12);
   const auto secondary = test::secondary_rays(mesh, rays, 13);
-  for (const char* spec : kBspSpecs) {
-    auto a = make_accelerator(spec);
-    a->build(mesh);
-    std::string first;
-    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, rays, &first), 0u) << spec << ": " << first;
-    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, secondary, &first), 0u) << spec << ": " << first;
-  }
+  test::expect_specs_agree_with_brute(kBspSpecs, mesh, {rays, secondary});
 }
 
 // Rays lying in triangle planes (the split planes of triangle-plane nodes):

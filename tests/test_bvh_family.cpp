@@ -512,7 +512,7 @@ TEST(BvhLbvh, CoincidentCentroidsGiveABalancedTree) {
   const Prims p = prims_of(m);
   const BinaryBvh t = build_lbvh(p.boxes, p.centroids);
   check_binary_tree(t, m, false);
-  const TreeShape shape = measure_tree(t.nodes);
+  const Bvh2Shape shape = measure_tree(t.nodes);
   EXPECT_LE(shape.max_depth, 2 + static_cast<int>(std::ceil(std::log2(2.0 * n)))) << "ties split by index";
   // And the accelerator built on it answers like brute force.
   auto a = make_accelerator("bvh:builder=lbvh");

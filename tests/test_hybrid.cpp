@@ -23,13 +23,7 @@ TEST(Hybrid, AgreesWithBruteForceOnSoupAndSecondaryRays) {
   const std::vector<Ray> primary = test::rays_at_triangles(mesh, 1500, 3);
   const std::vector<Ray> secondary = test::secondary_rays(mesh, primary, 4);
   ASSERT_GT(secondary.size(), 500u);
-  for (const char* spec : kHybridSpecs) {
-    auto a = make_accelerator(spec);
-    a->build(mesh);
-    std::string first;
-    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, primary, &first), 0u) << spec << ": " << first;
-    EXPECT_EQ(test::count_brute_mismatches(*a, mesh, secondary, &first), 0u) << spec << ": " << first;
-  }
+  test::expect_specs_agree_with_brute(kHybridSpecs, mesh, {primary, secondary});
 }
 
 // Origins exactly on top-grid cell boundaries (the boundaries the walk and

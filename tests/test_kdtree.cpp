@@ -17,6 +17,7 @@
 #include "accel/kdtree/clip_triangle.h"
 #include "accel/registry.h"
 #include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
 #include "tests/test_util.h"
 
 namespace raylab {
@@ -38,52 +39,15 @@ Built build(const std::string& spec, const TriangleMesh& mesh) {
   return b;
 }
 
-void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-  const auto base = static_cast<uint32_t>(m.vertices.size());
-  m.vertices.insert(m.vertices.end(), {a, b, c});
-  m.triangles.push_back({base, base + 1, base + 2});
-}
-
-std::string describe(const Ray& r) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), "org (%a %a %a) dir (%a %a %a) t [%a %a]", r.org.x(), r.org.y(), r.org.z(), r.dir.x(),
-                r.dir.y(), r.dir.z(), r.tmin, r.tmax);
-  return buf;
-}
-
 // Brute-force answers for a set of rays, computed once and compared with
 // every k-d tree variant.
 using Reference = test::BruteReference;
 
 Reference brute_force(const TriangleMesh& mesh, std::span<const Ray> rays) { return test::brute_reference(mesh, rays); }
 
-// Closest hit, occlusion and the instrumented kernel must agree with brute
-// force exactly: the same hit or miss, the same distance bit for bit, and the
-// same triangle unless another one is hit at exactly that distance. Returns
-// the number of rays that differ (and describes the first).
 size_t count_mismatches(const Accelerator& kd, const Reference& ref, std::span<const Ray> rays,
                         std::string* first = nullptr) {
-  const size_t n = rays.size();
-  std::vector<Hit> a(n), c(n);
-  std::vector<uint8_t> oa(n);
-  kd.intersect(rays, a);
-  TraversalStats st;
-  kd.intersect(rays, c, &st);
-  kd.occluded(rays, oa);
-  size_t bad = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const Hit& b = ref.hits[i];
-    const bool same_hit = a[i].valid() == b.valid() && (!a[i].valid() || a[i].t == b.t);
-    const bool same_count_kernel = c[i].valid() == a[i].valid() && c[i].t == a[i].t && c[i].prim == a[i].prim;
-    if (same_hit && same_count_kernel && oa[i] == ref.occluded[i]) continue;
-    if (bad++ == 0 && first) {
-      char buf[200];
-      std::snprintf(buf, sizeof(buf), " -> kd (%d, t %a, prim %u) brute (%d, t %a, prim %u) occluded kd %d brute %d",
-                    a[i].valid(), a[i].t, a[i].prim, b.valid(), b.t, b.prim, oa[i], ref.occluded[i]);
-      *first = describe(rays[i]) + buf;
-    }
-  }
-  return bad;
+  return test::count_brute_mismatches(kd, ref.hits, ref.occluded, rays, first);
 }
 
 size_t count_mismatches(const Accelerator& kd, const TriangleMesh& mesh, std::span<const Ray> rays,
@@ -162,6 +126,18 @@ KdTree build_tree(const std::string& kind, const TriangleMesh& mesh, const KdBui
   return kind == "median" ? build_kdtree_median(mesh, opt) : build_kdtree_sah(mesh, opt);
 }
 
+// fn(kind, clip, tree) for both builders with and without perfect splits.
+void for_each_builder_variant(const TriangleMesh& mesh,
+                              const std::function<void(const std::string&, bool, const KdTree&)>& fn) {
+  for (const std::string kind : {"sah", "median"}) {
+    for (bool clip : {true, false}) {
+      KdBuildOptions opt;
+      opt.perfect_splits = clip;
+      fn(kind, clip, build_tree(kind, mesh, opt));
+    }
+  }
+}
+
 // Scenes shared by several tests.
 TriangleMesh cornell() { return cornell_box_mesh(); }
 
@@ -172,7 +148,7 @@ TriangleMesh overlapping_planes(size_t n, uint64_t seed) {
   Pcg32 rng(seed, 5);
   for (size_t i = 0; i < n; ++i) {
     const float x = static_cast<float>(rng.next() % 8) / 8.0f;
-    add_triangle(m, Vec3f(x, rng.uniform(), rng.uniform()), Vec3f(x, rng.uniform(), rng.uniform()),
+    test::add_triangle(m, Vec3f(x, rng.uniform(), rng.uniform()), Vec3f(x, rng.uniform(), rng.uniform()),
                  Vec3f(x, rng.uniform(), rng.uniform()));
   }
   return m;
@@ -275,7 +251,7 @@ TEST(KdTree, PlanarTrianglesInsideAVolumeGetTheirOwnFlatCells) {
   Pcg32 rng(12, 1);
   for (int i = 0; i < 2000; ++i) {
     const float y = rng.uniform(), z = rng.uniform();
-    add_triangle(mesh, Vec3f(0.5f, y, z), Vec3f(0.5f, y + 0.05f, z), Vec3f(0.5f, y, z + 0.05f));
+    test::add_triangle(mesh, Vec3f(0.5f, y, z), Vec3f(0.5f, y + 0.05f, z), Vec3f(0.5f, y, z + 0.05f));
   }
   const KdTree tree = build_kdtree_sah(mesh, {});
   size_t splits_at_plane = 0, flat_leaves = 0;
@@ -390,11 +366,7 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
       {"coplanar", coplanar_mesh(500, 8, 1, 22)},
       {"sphere", make_uv_sphere(32, 16, Vec3f(0.25f, 0.5f, -0.125f), 1.0f)}};
   for (const auto& [name, mesh] : scenes) {
-    for (const std::string kind : {"sah", "median"}) {
-      for (bool clip : {true, false}) {
-        KdBuildOptions opt;
-        opt.perfect_splits = clip;
-        const KdTree tree = build_tree(kind, mesh, opt);
+    for_each_builder_variant(mesh, [&](const std::string& kind, bool clip, const KdTree& tree) {
         const std::string spec =
             std::string("kdtree:builder=") + kind + ",clip=" + (clip ? "1" : "0");
         const Built kd = build(spec, mesh);
@@ -402,8 +374,7 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
         ASSERT_GT(rays.size(), 1000u) << name;
         std::string first;
         EXPECT_EQ(count_mismatches(*kd.accel, mesh, rays, &first), 0u) << name << " " << spec << ": " << first;
-      }
-    }
+    });
   }
 }
 
@@ -426,9 +397,9 @@ TEST(KdTreeTraversal, SignedZeroDirectionsGiveTheSameAnswer) {
     const Hit ref = brute->intersect1(Ray(o, d));
     for (const Vec3f& dir : {d, dn}) {
       const Hit h = kd.accel->intersect1(Ray(o, dir));
-      ASSERT_EQ(h.valid(), ref.valid()) << describe(Ray(o, dir));
+      ASSERT_EQ(h.valid(), ref.valid()) << test::describe_ray(Ray(o, dir));
       if (ref.valid()) {
-        EXPECT_EQ(h.t, ref.t) << describe(Ray(o, dir));
+        EXPECT_EQ(h.t, ref.t) << test::describe_ray(Ray(o, dir));
       }
       EXPECT_EQ(kd.accel->occluded1(Ray(o, dir)), ref.valid());
     }
@@ -502,8 +473,8 @@ TEST(KdTreeTraversal, InvalidRaysAndEmptyMeshMiss) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (const Ray& r : {Ray(o, Vec3f::Zero()), Ray(o, Vec3f(nan, 0, 1)), Ray(Vec3f(nan, 0, 0), Vec3f(0, 0, 1)),
                        Ray(o, Vec3f(0, 1, 0), 2.0f, 1.0f), Ray(o, Vec3f(0, 1, 0), nan, 1.0f)}) {
-    EXPECT_FALSE(kd.accel->intersect1(r).valid()) << describe(r);
-    EXPECT_FALSE(kd.accel->occluded1(r)) << describe(r);
+    EXPECT_FALSE(kd.accel->intersect1(r).valid()) << test::describe_ray(r);
+    EXPECT_FALSE(kd.accel->occluded1(r)) << test::describe_ray(r);
   }
   // A denormal direction component: handled conservatively, still exact.
   const Ray tiny(o, Vec3f(1e-40f, -1.0f, 1e-41f));
@@ -547,11 +518,7 @@ TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
       {"sphere far away", make_uv_sphere(24, 12, Vec3f(3e4f, 1e4f, -2e4f), 10.0f)},
       {"cornell", cornell()}};
   for (const auto& [name, mesh] : scenes) {
-    for (const std::string kind : {"sah", "median"}) {
-      for (bool clip : {true, false}) {
-        KdBuildOptions opt;
-        opt.perfect_splits = clip;
-        const KdTree tree = build_tree(kind, mesh, opt);
+    for_each_builder_variant(mesh, [&](const std::string& kind, bool clip, const KdTree& tree) {
         Pcg32 rng(52, 1);
         size_t missing = 0, checked = 0;
         for (size_t t = 0; t < mesh.num_triangles(); ++t) {
@@ -588,8 +555,7 @@ TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
         }
         EXPECT_GT(checked, mesh.num_triangles());
         EXPECT_EQ(missing, 0u) << name << " " << kind << " clip " << clip;
-      }
-    }
+    });
   }
 }
 
@@ -669,14 +635,14 @@ TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
   cases.push_back({"50k copies", triangle_copies_mesh(50000), 1.0});
   {
     TriangleMesh points;  // zero-area triangles, all at the same point
-    for (int i = 0; i < 20000; ++i) add_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
+    for (int i = 0; i < 20000; ++i) test::add_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
     cases.push_back({"identical points", points, 1.0});
   }
   {
     TriangleMesh planar;  // two axis-aligned triangles, each duplicated 10000 times
     for (int i = 0; i < 10000; ++i) {
-      add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
-      add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 0, 1));
+      test::add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+      test::add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 0, 1));
     }
     cases.push_back({"duplicated planar pair", planar, 1.0});
   }

@@ -111,6 +111,27 @@ class TileRenderer {
     shadow.path.push_back(path_id);
   }
 
+  // The key light (a distant "sun"): a shadow ray towards it.
+  void sample_key_light(const Path& path, uint32_t path_id, const Vec3f& origin, const Vec3f& n, const Vec3f& f,
+                        ShadowBatch& shadow) const {
+    const float cos_s = n.dot(scene_.key_light_dir);
+    if (!(cos_s > 0.0f)) return;
+    shadow.rays.emplace_back(origin, scene_.key_light_dir);
+    shadow.contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(scene_.key_light) * cos_s);
+    shadow.path.push_back(path_id);
+  }
+
+  // Traces the batch's shadow rays and adds the unoccluded contributions;
+  // returns the number of rays traced.
+  size_t trace_shadows(const ShadowBatch& shadow, std::vector<Path>& paths, std::vector<uint8_t>& occluded) const {
+    if (shadow.rays.empty()) return 0;
+    occluded.resize(shadow.rays.size());
+    accel_.occluded(shadow.rays, occluded);
+    for (size_t j = 0; j < shadow.rays.size(); ++j)
+      if (!occluded[j]) paths[shadow.path[j]].radiance += shadow.contrib[j];
+    return shadow.rays.size();
+  }
+
   void trace_paths(std::vector<Path>& paths, std::vector<Ray>& rays, uint64_t& ray_count,
                    uint64_t& shadow_count) const {
     std::vector<uint32_t> active(paths.size());
@@ -166,15 +187,7 @@ class TileRenderer {
 
         if (!lights_.empty()) sample_light(path, active[k], origin, n, f, shadow);
 
-        // The key light (a distant "sun"): a shadow ray towards it.
-        if (scene_.key_light.maxCoeff() > 0.0f) {
-          const float cos_s = n.dot(scene_.key_light_dir);
-          if (cos_s > 0.0f) {
-            shadow.rays.emplace_back(origin, scene_.key_light_dir);
-            shadow.contrib.push_back(path.throughput.cwiseProduct(f).cwiseProduct(scene_.key_light) * cos_s);
-            shadow.path.push_back(active[k]);
-          }
-        }
+        if (scene_.key_light.maxCoeff() > 0.0f) sample_key_light(path, active[k], origin, n, f, shadow);
 
         // Continue the path by cosine-weighted sampling.
         const float b1 = path.rng.uniform(), b2 = path.rng.uniform();
@@ -192,13 +205,7 @@ class TileRenderer {
         next_active.push_back(active[k]);
       }
 
-      if (!shadow.rays.empty()) {
-        occluded.resize(shadow.rays.size());
-        accel_.occluded(shadow.rays, occluded);
-        shadow_count += shadow.rays.size();
-        for (size_t j = 0; j < shadow.rays.size(); ++j)
-          if (!occluded[j]) paths[shadow.path[j]].radiance += shadow.contrib[j];
-      }
+      shadow_count += trace_shadows(shadow, paths, occluded);
       rays.swap(next_rays);
       active.swap(next_active);
     }

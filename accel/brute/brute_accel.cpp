@@ -3,6 +3,7 @@
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 
 namespace raylab {
@@ -48,15 +49,13 @@ class BruteAccel final : public BatchAccelerator<BruteAccel> {
 }  // namespace
 
 AcceleratorInfo brute_accelerator_info() {
-  AcceleratorInfo info{"brute",
+  AcceleratorInfo info = structure_info("brute",
                        "tests every triangle (ground truth for small scenes)",
-                       {triangle_test_param()},
+                       {},
                        [](const Params& p) -> std::unique_ptr<Accelerator> {
                          return std::make_unique<BruteAccel>(parse_triangle_test(p));
-                       }};
-  info.caps.mt_variant = "tri=mt";
+                       });
   info.caps.quadratic = true;
-  info.caps.outline = true;
   info.cover = {"brute:tri=mt"};
   info.build_peak_bytes_per_triangle = 45;  // from its layout (40-byte leaf triangles); not measured at 10^7
   return info;

@@ -32,6 +32,7 @@
 #include <limits>
 
 #include "accel/bsp/bsp_node.h"
+#include "accel/core/traversal_stack.h"
 #include "accel/kdtree/traverse_kdtree.h"
 
 namespace raylab {
@@ -90,12 +91,7 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
   BspPlaneRay fixed[13];
   for (int k = 3; k < tree.num_fixed_dirs; ++k) fixed[k] = bsp_plane_ray(tree.fixed_dirs[k].data(), org, dir);
 
-  struct Entry {
-    uint32_t node;
-    float t0, t1;
-  };
-  Entry stack[kBspMaxDepthLimit];
-  int sp = 0;
+  IntervalStack<kBspMaxDepthLimit> stack;
   uint32_t node = 0;
   while (true) {
     BspNode n = tree.nodes[node];
@@ -120,30 +116,19 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
         near = n.index + p.neg;
         far = n.index + 1u - p.neg;
       }
-      const bool visit_near = !(t_near_end < t0);
-      const bool visit_far = !(t_far_start > t1);
-      stack[sp] = Entry{far, t_far_start > t0 ? t_far_start : t0, t1};
-      sp += (visit_near && visit_far) ? 1 : 0;
-      t1 = (visit_near && t_near_end < t1) ? t_near_end : t1;
-      node = visit_near ? near : far;
+      node = stack.descend(near, far, t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
     rec.count_nodes(1);
     if (intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.index, n.count(), rec)) {
       if constexpr (kAnyHit) return rec.hit();
     }
-    const float t_bound = rec.tmax() + delta_t;
-    while (true) {
-      if (sp == 0) return rec.hit();
-      const Entry& e = stack[--sp];
-      if (e.t0 <= t_bound) {
-        node = e.node;
-        t0 = e.t0;
-        t1 = e.t1 < t_bound ? e.t1 : t_bound;
-        break;
-      }
-    }
+    if (!stack.pop_within(rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
   }
 }
+
+// The walk under the name the generic shell calls (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_view(const BspView& v, const Ray& ray, TraversalStats* stats) { return traverse_bsp<kTest, kAnyHit, kCount>(v, ray, stats); }
 
 }  // namespace raylab

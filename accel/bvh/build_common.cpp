@@ -58,34 +58,28 @@ BinaryBvh relayout_depth_first(const BinaryBvh& in) {
   return out;
 }
 
-TreeShape measure_tree(std::span<const Bvh2Node> nodes) {
-  TreeShape s;
+Bvh2Shape measure_tree(std::span<const Bvh2Node> nodes) {
+  Bvh2Shape s;
   if (nodes.empty()) return s;
   const double root_area = nodes[0].bounds().half_area();
   struct Item {
     uint32_t node;
     int depth;
   };
-  std::vector<Item> stack{{0, 0}};
   SahTally tally;
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
+  walk_depth_first(Item{0, 0}, [&](const Item& it, auto&& push) {
     const Bvh2Node& n = nodes[it.node];
-    s.nodes++;
-    s.max_depth = std::max(s.max_depth, it.depth);
+    tally.node(it.depth);
     const double area = n.bounds().half_area();
     if (n.is_leaf() || n.index == 0) {
-      s.leaves++;
       tally.leaf(area, n.count, it.depth);
     } else {
       tally.inner(area);
-      stack.push_back({n.index, it.depth + 1});
-      stack.push_back({n.index + 1, it.depth + 1});
+      push({n.index, it.depth + 1});
+      push({n.index + 1, it.depth + 1});
     }
-  }
-  s.avg_leaf_depth = tally.avg_leaf_depth();
-  s.sah_cost = tally.sah_cost(root_area);
+  });
+  tally.fill(s, root_area);
   return s;
 }
 

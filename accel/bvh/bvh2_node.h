@@ -37,7 +37,7 @@ struct BinaryBvh {
 
 // Tree quality is reported with the constants of accel/core/sah_report.h.
 
-struct TreeShape {
+struct Bvh2Shape {
   size_t nodes = 0, leaves = 0;
   int max_depth = 0;
   double avg_leaf_depth = 0.0;
@@ -45,7 +45,7 @@ struct TreeShape {
 };
 
 // Walks the tree once: node/leaf counts, depths and SAH cost.
-TreeShape measure_tree(std::span<const Bvh2Node> nodes);
+Bvh2Shape measure_tree(std::span<const Bvh2Node> nodes);
 
 // SAH cost only (same constants), as a parallel sum over the node array:
 // every node in the array is part of the tree.

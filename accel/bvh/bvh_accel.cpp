@@ -73,38 +73,33 @@ class Kernel {
   virtual void outline(int max_depth, StructureOutline& out) const = 0;
 };
 
-class Bvh2Kernel final : public BatchAccelerator<Bvh2Kernel, Kernel> {
+// The binary tree traced one ray at a time, with boxes (bvh2) or spheres
+// (bound=sphere) as node bounds: the tree, its view, its walk
+// (traverse_view) and its picture.
+template <typename Tree, typename View, View (*kViewOf)(const Tree&),
+          void (*kOutline)(const Tree&, int, StructureOutline&)>
+class BinaryTreeKernel final : public BatchAccelerator<BinaryTreeKernel<Tree, View, kViewOf, kOutline>, Kernel> {
  public:
-  Bvh2Kernel(Bvh2Layout layout, TriangleTest tri)
-      : BatchAccelerator(tri), layout_(std::move(layout)), view_(layout_.view()) {}
+  BinaryTreeKernel(Tree tree, TriangleTest tri)
+      : BatchAccelerator<BinaryTreeKernel, Kernel>(tri), tree_(std::move(tree)), view_(kViewOf(tree_)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_bvh2<kTest, kAnyHit, kCount>(view_, ray, stats);
+    return traverse_view<kTest, kAnyHit, kCount>(view_, ray, stats);
   }
-  void outline(int max_depth, StructureOutline& out) const override { outline_bvh2(layout_, max_depth, out); }
+  void outline(int max_depth, StructureOutline& out) const override { kOutline(tree_, max_depth, out); }
 
  private:
-  Bvh2Layout layout_;
-  Bvh2View view_;
+  Tree tree_;
+  View view_;
 };
 
-// bound=sphere: the binary tree's nodes bounded by spheres.
-class SphereKernel final : public BatchAccelerator<SphereKernel, Kernel> {
- public:
-  SphereKernel(SphereBvh bvh, TriangleTest tri)
-      : BatchAccelerator(tri), bvh_(std::move(bvh)), view_{bvh_.nodes.data(), bvh_.tris.data(), bvh_.tris.empty()} {}
-
-  template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_sphere_bvh<kTest, kAnyHit, kCount>(view_, ray, stats);
-  }
-  void outline(int max_depth, StructureOutline& out) const override { outline_sphere_bvh(bvh_, max_depth, out); }
-
- private:
-  SphereBvh bvh_;
-  SphereBvhView view_;
-};
+Bvh2View bvh2_view(const Bvh2Layout& layout) { return layout.view(); }
+SphereBvhView sphere_bvh_view(const SphereBvh& bvh) {
+  return SphereBvhView{bvh.nodes.data(), bvh.tris.data(), bvh.tris.empty()};
+}
+using Bvh2Kernel = BinaryTreeKernel<Bvh2Layout, Bvh2View, bvh2_view, outline_bvh2>;
+using SphereKernel = BinaryTreeKernel<SphereBvh, SphereBvhView, sphere_bvh_view, outline_sphere_bvh>;
 
 // The wide layouts test triangles with the vectorised watertight test only.
 template <int N, int W>

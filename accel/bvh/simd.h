@@ -132,24 +132,19 @@ struct vfloat {
     return r;
   }
   // Float min/max through the integer order of the bits (see vfloat<8>).
+  static int32_t signed_bits(float f) {
+    int32_t x;
+    std::memcpy(&x, &f, 4);
+    return x;
+  }
   friend vfloat min_bits(const vfloat& a, const vfloat& b) {
     vfloat r;
-    for (int i = 0; i < W; ++i) {
-      int32_t x, y;
-      std::memcpy(&x, &a.v[i], 4);
-      std::memcpy(&y, &b.v[i], 4);
-      r.v[i] = x < y ? a.v[i] : b.v[i];
-    }
+    for (int i = 0; i < W; ++i) r.v[i] = signed_bits(a.v[i]) < signed_bits(b.v[i]) ? a.v[i] : b.v[i];
     return r;
   }
   friend vfloat max_bits(const vfloat& a, const vfloat& b) {
     vfloat r;
-    for (int i = 0; i < W; ++i) {
-      int32_t x, y;
-      std::memcpy(&x, &a.v[i], 4);
-      std::memcpy(&y, &b.v[i], 4);
-      r.v[i] = x > y ? a.v[i] : b.v[i];
-    }
+    for (int i = 0; i < W; ++i) r.v[i] = signed_bits(a.v[i]) > signed_bits(b.v[i]) ? a.v[i] : b.v[i];
     return r;
   }
   // min/max with the x86 convention: the second operand wins when either is NaN.
@@ -171,27 +166,66 @@ struct vfloat {
   }
 };
 
+// a*b+c lane by lane with std::fma (exact, but slow without hardware FMA).
+template <typename V, int W>
+V fmadd_by_lanes(V a, V b, V c) {
+  alignas(4 * W) float x[W], y[W], z[W];
+  a.store(x), b.store(y), c.store(z);
+  for (int i = 0; i < W; ++i) x[i] = std::fma(x[i], y[i], z[i]);
+  return V::load(x);
+}
+
+// The members of the register specialisations whose intrinsics differ only
+// in their width prefix (MM: _mm, _mm256 or _mm512), written once.
+#define RAYLAB_VF_INTRINSICS(MM)                                                   \
+  static vfloat load(const float* p) { return {MM##_load_ps(p)}; }                 \
+  static vfloat broadcast(float x) { return {MM##_set1_ps(x)}; }                   \
+  void store(float* p) const { MM##_store_ps(p, v); }                              \
+  friend vfloat operator+(vfloat a, vfloat b) { return {MM##_add_ps(a.v, b.v)}; }  \
+  friend vfloat operator-(vfloat a, vfloat b) { return {MM##_sub_ps(a.v, b.v)}; }  \
+  friend vfloat operator*(vfloat a, vfloat b) { return {MM##_mul_ps(a.v, b.v)}; }  \
+  friend vfloat operator/(vfloat a, vfloat b) { return {MM##_div_ps(a.v, b.v)}; }  \
+  friend vfloat andnot(vfloat a, vfloat b) { return {MM##_andnot_ps(a.v, b.v)}; }  \
+  friend vfloat min(vfloat a, vfloat b) { return {MM##_min_ps(a.v, b.v)}; }        \
+  friend vfloat max(vfloat a, vfloat b) { return {MM##_max_ps(a.v, b.v)}; }
+
+// min/max by the signed-integer order of the bits: equal to float min/max
+// when both are >= +0, and a negative input always wins min / loses max.
+// One cycle instead of four (Embree's slab test uses the same trick).
+// BITS: the register width in the cast intrinsics' names (128, 256).
+#define RAYLAB_VF_INTEGER_MIN_MAX(MM, BITS)                                                         \
+  friend vfloat min_bits(vfloat a, vfloat b) {                                                      \
+    return {MM##_castsi##BITS##_ps(MM##_min_epi32(MM##_castps_si##BITS(a.v), MM##_castps_si##BITS(b.v)))}; \
+  }                                                                                                 \
+  friend vfloat max_bits(vfloat a, vfloat b) {                                                      \
+    return {MM##_castsi##BITS##_ps(MM##_max_epi32(MM##_castps_si##BITS(a.v), MM##_castps_si##BITS(b.v)))}; \
+  }
+
+// a*b+c with a single rounding: one instruction, or lane by lane.
+#if defined(RAYLAB_SIMD_FMA)
+#define RAYLAB_VF_FMADD(MM, W) \
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {MM##_fmadd_ps(a.v, b.v, c.v)}; }
+#else
+#define RAYLAB_VF_FMADD(MM, W) \
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return fmadd_by_lanes<vfloat, W>(a, b, c); }
+#endif
+
+// Comparisons into AVX-512 mask registers (any width with AVX-512VL).
+#define RAYLAB_VF_MASK_COMPARE(MM)                                                             \
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }  \
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }  \
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }  \
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }  \
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }  \
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return MM##_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+
 #if defined(__SSE2__)
 template <>
 struct vfloat<4> {
   __m128 v;
-  static vfloat load(const float* p) { return {_mm_load_ps(p)}; }
-  static vfloat broadcast(float x) { return {_mm_set1_ps(x)}; }
-  void store(float* p) const { _mm_store_ps(p, v); }
-  friend vfloat operator+(vfloat a, vfloat b) { return {_mm_add_ps(a.v, b.v)}; }
-  friend vfloat operator-(vfloat a, vfloat b) { return {_mm_sub_ps(a.v, b.v)}; }
-  friend vfloat operator*(vfloat a, vfloat b) { return {_mm_mul_ps(a.v, b.v)}; }
-  friend vfloat operator/(vfloat a, vfloat b) { return {_mm_div_ps(a.v, b.v)}; }
-  friend vfloat andnot(vfloat a, vfloat b) { return {_mm_andnot_ps(a.v, b.v)}; }
-  friend vfloat min(vfloat a, vfloat b) { return {_mm_min_ps(a.v, b.v)}; }
-  friend vfloat max(vfloat a, vfloat b) { return {_mm_max_ps(a.v, b.v)}; }
+  RAYLAB_VF_INTRINSICS(_mm)
 #if defined(__SSE4_1__)
-  friend vfloat min_bits(vfloat a, vfloat b) {
-    return {_mm_castsi128_ps(_mm_min_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
-  }
-  friend vfloat max_bits(vfloat a, vfloat b) {
-    return {_mm_castsi128_ps(_mm_max_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))};
-  }
+  RAYLAB_VF_INTEGER_MIN_MAX(_mm, 128)
 #else
   friend vfloat min_bits(vfloat a, vfloat b) {
     const __m128i x = _mm_castps_si128(a.v), y = _mm_castps_si128(b.v);
@@ -205,12 +239,7 @@ struct vfloat<4> {
   }
 #endif
 #if defined(RAYLAB_SIMD_AVX512)
-  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
-  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
-  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
-  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
-  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
-  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+  RAYLAB_VF_MASK_COMPARE(_mm)
 #else
   friend uint32_t cmp_lt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmplt_ps(a.v, b.v))); }
   friend uint32_t cmp_le(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmple_ps(a.v, b.v))); }
@@ -219,16 +248,7 @@ struct vfloat<4> {
   friend uint32_t cmp_eq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpeq_ps(a.v, b.v))); }
   friend uint32_t cmp_neq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpneq_ps(a.v, b.v))); }
 #endif
-#if defined(RAYLAB_SIMD_FMA)
-  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm_fmadd_ps(a.v, b.v, c.v)}; }
-#else
-  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) {
-    alignas(16) float x[4], y[4], z[4];
-    a.store(x), b.store(y), c.store(z);
-    for (int i = 0; i < 4; ++i) x[i] = std::fma(x[i], y[i], z[i]);
-    return load(x);
-  }
-#endif
+  RAYLAB_VF_FMADD(_mm, 4)
 };
 #endif
 
@@ -236,55 +256,28 @@ struct vfloat<4> {
 template <>
 struct vfloat<8> {
   __m256 v;
-  static vfloat load(const float* p) { return {_mm256_load_ps(p)}; }
-  static vfloat broadcast(float x) { return {_mm256_set1_ps(x)}; }
-  void store(float* p) const { _mm256_store_ps(p, v); }
-  friend vfloat operator+(vfloat a, vfloat b) { return {_mm256_add_ps(a.v, b.v)}; }
-  friend vfloat operator-(vfloat a, vfloat b) { return {_mm256_sub_ps(a.v, b.v)}; }
-  friend vfloat operator*(vfloat a, vfloat b) { return {_mm256_mul_ps(a.v, b.v)}; }
-  friend vfloat operator/(vfloat a, vfloat b) { return {_mm256_div_ps(a.v, b.v)}; }
-  friend vfloat andnot(vfloat a, vfloat b) { return {_mm256_andnot_ps(a.v, b.v)}; }
-  friend vfloat min(vfloat a, vfloat b) { return {_mm256_min_ps(a.v, b.v)}; }
-  friend vfloat max(vfloat a, vfloat b) { return {_mm256_max_ps(a.v, b.v)}; }
-  // min/max by the signed-integer order of the bits: equal to float min/max
-  // when both are >= +0, and a negative input always wins min / loses max.
-  // One cycle instead of four (Embree's slab test uses the same trick).
+  RAYLAB_VF_INTRINSICS(_mm256)
 #if defined(__AVX2__)
-  friend vfloat min_bits(vfloat a, vfloat b) {
-    return {_mm256_castsi256_ps(_mm256_min_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
-  }
-  friend vfloat max_bits(vfloat a, vfloat b) {
-    return {_mm256_castsi256_ps(_mm256_max_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v)))};
-  }
+  RAYLAB_VF_INTEGER_MIN_MAX(_mm256, 256)
 #else
   friend vfloat min_bits(vfloat a, vfloat b) { return min(a, b); }
   friend vfloat max_bits(vfloat a, vfloat b) { return max(a, b); }
 #endif
 #if defined(RAYLAB_SIMD_AVX512)
-  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
-  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
-  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
-  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
-  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
-  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+  RAYLAB_VF_MASK_COMPARE(_mm256)
 #else
-  friend uint32_t cmp_lt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ))); }
-  friend uint32_t cmp_le(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ))); }
-  friend uint32_t cmp_gt(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ))); }
-  friend uint32_t cmp_ge(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ))); }
-  friend uint32_t cmp_eq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ))); }
-  friend uint32_t cmp_neq(vfloat a, vfloat b) { return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_NEQ_UQ))); }
-#endif
-#if defined(RAYLAB_SIMD_FMA)
-  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm256_fmadd_ps(a.v, b.v, c.v)}; }
-#else
-  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) {
-    alignas(32) float x[8], y[8], z[8];
-    a.store(x), b.store(y), c.store(z);
-    for (int i = 0; i < 8; ++i) x[i] = std::fma(x[i], y[i], z[i]);
-    return load(x);
+  template <int kPredicate>
+  static uint32_t compare(vfloat a, vfloat b) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, kPredicate)));
   }
+  friend uint32_t cmp_lt(vfloat a, vfloat b) { return compare<_CMP_LT_OQ>(a, b); }
+  friend uint32_t cmp_le(vfloat a, vfloat b) { return compare<_CMP_LE_OQ>(a, b); }
+  friend uint32_t cmp_gt(vfloat a, vfloat b) { return compare<_CMP_GT_OQ>(a, b); }
+  friend uint32_t cmp_ge(vfloat a, vfloat b) { return compare<_CMP_GE_OQ>(a, b); }
+  friend uint32_t cmp_eq(vfloat a, vfloat b) { return compare<_CMP_EQ_OQ>(a, b); }
+  friend uint32_t cmp_neq(vfloat a, vfloat b) { return compare<_CMP_NEQ_UQ>(a, b); }
 #endif
+  RAYLAB_VF_FMADD(_mm256, 8)
 };
 #endif
 
@@ -292,16 +285,7 @@ struct vfloat<8> {
 template <>
 struct vfloat<16> {
   __m512 v;
-  static vfloat load(const float* p) { return {_mm512_load_ps(p)}; }
-  static vfloat broadcast(float x) { return {_mm512_set1_ps(x)}; }
-  void store(float* p) const { _mm512_store_ps(p, v); }
-  friend vfloat operator+(vfloat a, vfloat b) { return {_mm512_add_ps(a.v, b.v)}; }
-  friend vfloat operator-(vfloat a, vfloat b) { return {_mm512_sub_ps(a.v, b.v)}; }
-  friend vfloat operator*(vfloat a, vfloat b) { return {_mm512_mul_ps(a.v, b.v)}; }
-  friend vfloat operator/(vfloat a, vfloat b) { return {_mm512_div_ps(a.v, b.v)}; }
-  friend vfloat andnot(vfloat a, vfloat b) { return {_mm512_andnot_ps(a.v, b.v)}; }
-  friend vfloat min(vfloat a, vfloat b) { return {_mm512_min_ps(a.v, b.v)}; }
-  friend vfloat max(vfloat a, vfloat b) { return {_mm512_max_ps(a.v, b.v)}; }
+  RAYLAB_VF_INTRINSICS(_mm512)
   // Zero-masking forms with a full mask: GCC 12's unmasked forms read an
   // undefined vector and trip -Wmaybe-uninitialized (as in sort_network.h).
   friend vfloat min_bits(vfloat a, vfloat b) {
@@ -310,14 +294,14 @@ struct vfloat<16> {
   friend vfloat max_bits(vfloat a, vfloat b) {
     return {_mm512_castsi512_ps(_mm512_maskz_max_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
   }
-  friend uint32_t cmp_lt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
-  friend uint32_t cmp_le(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
-  friend uint32_t cmp_gt(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
-  friend uint32_t cmp_ge(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
-  friend uint32_t cmp_eq(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
-  friend uint32_t cmp_neq(vfloat a, vfloat b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+  RAYLAB_VF_MASK_COMPARE(_mm512)
   friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
 };
 #endif
+
+#undef RAYLAB_VF_INTRINSICS
+#undef RAYLAB_VF_MASK_COMPARE
+#undef RAYLAB_VF_INTEGER_MIN_MAX
+#undef RAYLAB_VF_FMADD
 
 }  // namespace raylab::simd

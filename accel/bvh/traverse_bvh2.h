@@ -17,6 +17,7 @@
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/slab_test.h"
+#include "accel/core/traversal_stack.h"
 
 namespace raylab {
 
@@ -30,72 +31,63 @@ struct Bvh2View {
 // depth 96), and only far children are pushed.
 inline constexpr int kBvh2StackSize = 192;
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
-  HitRecorder<kAnyHit, kCount> rec(ray, stats);
-  if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
-
-  // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
-  const SlabRay sr(ray);
+// The walk shared by the binary trees (Bvh2Node boxes, SphereNode spheres:
+// nodes with `index` = left child or first triangle, `count` = 0 for inner
+// nodes): `enters(node, bound, t)` tests a node's bounds against [tmin,
+// bound] and gives the entry distance t. The caller's recorder has counted
+// the ray and checked it.
+template <TriangleTest kTest, typename Node, typename Recorder, typename Enters>
+[[gnu::always_inline]] inline Hit walk_binary_bvh(const Node* nodes, const LeafTriangle* tris, const Ray& ray,
+                                                  Recorder& rec, Enters&& enters) {
   const TrianglePrecompute<kTest> pre(ray);
-  const float tmin = ray.tmin;
-  float box_tmax = pad_far(rec.tmax());
-
-  struct Entry {
-    uint32_t node;
-    float t;
-  };
-  Entry stack[kBvh2StackSize];
-  int sp = 0;
+  float bound = pad_far(rec.tmax());
+  EntryDistanceStack<kBvh2StackSize> stack;
 
   float t_root;
   rec.count_nodes(1);
-  if (!slab_test(sr, bvh.nodes[0].lo, bvh.nodes[0].hi, tmin, box_tmax, t_root)) return rec.hit();
+  if (!enters(nodes[0], bound, t_root)) return rec.hit();
   uint32_t node = 0;
 
   while (true) {
-    const Bvh2Node& n = bvh.nodes[node];
+    const Node& n = nodes[node];
     if (n.count != 0) {
-      if (intersect_leaf(pre, ray, bvh.tris + n.index, n.count, rec)) {
-        if constexpr (kAnyHit) return rec.hit();
-        box_tmax = pad_far(rec.tmax());
+      if (intersect_leaf(pre, ray, tris + n.index, n.count, rec)) {
+        if constexpr (Recorder::kStopAtFirstHit) return rec.hit();
+        bound = pad_far(rec.tmax());
       }
     } else {
-      const Bvh2Node& l = bvh.nodes[n.index];
-      const Bvh2Node& r = bvh.nodes[n.index + 1];
       rec.count_nodes(2);
       float tl, tr;
-      const bool hl = slab_test(sr, l.lo, l.hi, tmin, box_tmax, tl);
-      const bool hr = slab_test(sr, r.lo, r.hi, tmin, box_tmax, tr);
+      const bool hl = enters(nodes[n.index], bound, tl);
+      const bool hr = enters(nodes[n.index + 1], bound, tr);
       if (hl && hr) {
-        uint32_t near = n.index, far = n.index + 1;
-        if (tr < tl) {
-          std::swap(near, far);
-          std::swap(tl, tr);
-        }
-        stack[sp++] = Entry{far, tr};
-        node = near;
+        node = stack.visit_nearer(n.index, tl, tr);
         continue;
       }
-      if (hl) {
-        node = n.index;
-        continue;
-      }
-      if (hr) {
-        node = n.index + 1;
+      if (hl || hr) {
+        node = hl ? n.index : n.index + 1;
         continue;
       }
     }
     // Pop the next subtree that can still hold a closer hit.
-    while (true) {
-      if (sp == 0) return rec.hit();
-      const Entry e = stack[--sp];
-      if (e.t <= box_tmax) {
-        node = e.node;
-        break;
-      }
-    }
+    if (!stack.pop_within(bound, node)) return rec.hit();
   }
 }
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
+  HitRecorder<kAnyHit, kCount> rec(ray, stats);
+  if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
+  // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
+  const SlabRay sr(ray);
+  return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
+                                [&](const Bvh2Node& n, float bound, float& t) __attribute__((always_inline)) {
+                                  return slab_test(sr, n.lo, n.hi, ray.tmin, bound, t);
+                                });
+}
+
+// The walk under the name the generic shells call (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_view(const Bvh2View& v, const Ray& ray, TraversalStats* stats) { return traverse_bvh2<kTest, kAnyHit, kCount>(v, ray, stats); }
 
 }  // namespace raylab

@@ -17,6 +17,7 @@
 
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/sphere_bounds.h"
+#include "accel/bvh/traverse_bvh2.h"
 #include "accel/structure_outline.h"
 
 namespace raylab {
@@ -81,57 +82,15 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_sphere_bvh(const SphereBvhView& bvh, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
-  const TrianglePrecompute<kTest> pre(ray);
   const float inv_dd = 1.0f / ray.dir.squaredNorm();
-  const float tmin = ray.tmin;
-  float bound = pad_far(rec.tmax());
-
-  struct Entry {
-    uint32_t node;
-    float t;
-  };
-  Entry stack[kBvh2StackSize];
-  int sp = 0;
-  float t_root;
-  rec.count_nodes(1);
-  if (!ray_sphere_test(ray, inv_dd, bvh.nodes[0], tmin, bound, t_root)) return rec.hit();
-  uint32_t node = 0;
-  while (true) {
-    const SphereNode& n = bvh.nodes[node];
-    if (n.count != 0) {
-      if (intersect_leaf(pre, ray, bvh.tris + n.index, n.count, rec)) {
-        if constexpr (kAnyHit) return rec.hit();
-        bound = pad_far(rec.tmax());
-      }
-    } else {
-      rec.count_nodes(2);
-      float tl, tr;
-      const bool hl = ray_sphere_test(ray, inv_dd, bvh.nodes[n.index], tmin, bound, tl);
-      const bool hr = ray_sphere_test(ray, inv_dd, bvh.nodes[n.index + 1], tmin, bound, tr);
-      if (hl && hr) {
-        uint32_t near = n.index, far = n.index + 1;
-        if (tr < tl) {
-          std::swap(near, far);
-          std::swap(tl, tr);
-        }
-        stack[sp++] = Entry{far, tr};
-        node = near;
-        continue;
-      }
-      if (hl || hr) {
-        node = hl ? n.index : n.index + 1;
-        continue;
-      }
-    }
-    while (true) {
-      if (sp == 0) return rec.hit();
-      const Entry e = stack[--sp];
-      if (e.t <= bound) {
-        node = e.node;
-        break;
-      }
-    }
-  }
+  return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
+                                [&](const SphereNode& n, float bound, float& t) __attribute__((always_inline)) {
+                                  return ray_sphere_test(ray, inv_dd, n, ray.tmin, bound, t);
+                                });
 }
+
+// The walk under the name the generic shells call (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_view(const SphereBvhView& v, const Ray& ray, TraversalStats* stats) { return traverse_sphere_bvh<kTest, kAnyHit, kCount>(v, ray, stats); }
 
 }  // namespace raylab

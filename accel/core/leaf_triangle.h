@@ -45,6 +45,39 @@ inline std::vector<LeafTriangle> copy_leaf_triangles(const TriangleMesh& mesh) {
   return copy_leaf_triangles(mesh, ids);
 }
 
+// Leaves that refer to triangles by index (a triangle may lie in several
+// leaves or nodes): each referenced triangle is copied once, in the order the
+// leaves first use it (neighbouring leaves share cache lines), and every
+// reference becomes an index into that copy. On the bunny (5.3 references per
+// triangle) this was faster than one copy per reference, with half the memory.
+struct IndexedLeafTriangles {
+  std::vector<LeafTriangle> tris;  // once per referenced triangle, in first-use order
+  std::vector<uint32_t> ids;       // ids[i]: the copy of the triangle refs[i] names
+};
+
+// The triangles `refs` names, each once, in first-use order; ids[i] becomes
+// the position of refs[i] in that order.
+inline std::vector<uint32_t> first_use_order(size_t num_triangles, std::span<const uint32_t> refs,
+                                             std::vector<uint32_t>& ids) {
+  std::vector<uint32_t> slot(num_triangles, UINT32_MAX), order;
+  ids.resize(refs.size());
+  for (size_t i = 0; i < refs.size(); ++i) {
+    const uint32_t id = refs[i];
+    if (slot[id] == UINT32_MAX) {
+      slot[id] = static_cast<uint32_t>(order.size());
+      order.push_back(id);
+    }
+    ids[i] = slot[id];
+  }
+  return order;
+}
+
+inline IndexedLeafTriangles copy_referenced_triangles(const TriangleMesh& mesh, std::span<const uint32_t> refs) {
+  IndexedLeafTriangles out;
+  out.tris = copy_leaf_triangles(mesh, first_use_order(mesh.num_triangles(), refs, out.ids));
+  return out;
+}
+
 // Tests one triangle on [ray.tmin, rec.tmax()]; true when the recorder kept the hit.
 template <TriangleTest kTest, typename Recorder>
 [[gnu::always_inline]] inline bool intersect_leaf_triangle(const TrianglePrecompute<kTest>& pre, const Ray& ray,

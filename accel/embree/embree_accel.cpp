@@ -377,45 +377,52 @@ AcceleratorInfo embree_accelerator_info() {
 
 namespace {
 
-const EmbreePrepared& direct_loop_input(const Accelerator& embree, const PreparedRays& prepared, bool occlusion,
-                                        size_t n) {
+// What a direct loop runs on: the prepared rays (checked to belong to this
+// accelerator, api=single, this kind of query and count), the scene and the
+// intersect context.
+struct DirectLoop {
+  const EmbreePrepared& rays;
+  RTCScene scene;
+  RTCIntersectContext ctx;
+};
+
+DirectLoop direct_loop_input(const Accelerator& embree, const PreparedRays& prepared, bool occlusion, size_t n) {
   const auto* accel = dynamic_cast<const EmbreeAccel*>(&embree);
   const auto* p = dynamic_cast<const EmbreePrepared*>(&prepared);
   if (!accel || accel->api() != Api::single || !p || p->owner != accel || p->occlusion != occlusion || p->count != n)
     throw std::invalid_argument("embree direct loop: needs rays prepared by an 'embree' accelerator with api=single");
-  return *p;
+  DirectLoop loop{*p, accel->scene(), {}};
+  rtcInitIntersectContext(&loop.ctx);
+  if (accel->coherent()) loop.ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  return loop;
+}
+
+// One rtcIntersect1 (closest hit) or rtcOccluded1 (any hit) per prepared ray.
+template <bool kOcclusion, typename Out>
+void direct_loop(const Accelerator& embree, const PreparedRays& prepared, std::span<Out> out) {
+  DirectLoop loop = direct_loop_input(embree, prepared, kOcclusion, out.size());
+  const size_t n = out.size();
+  for (size_t i = 0; i < n; ++i) {
+    if constexpr (kOcclusion) {
+      RTCRay ray = loop.rays.rays[i];
+      rtcOccluded1(loop.scene, &loop.ctx, &ray);
+      out[i] = ray.tfar < 0.0f ? 1 : 0;
+    } else {
+      RTCRayHit rh = loop.rays.rayhits[i];
+      rtcIntersect1(loop.scene, &loop.ctx, &rh);
+      write_hit(rh, out[i]);
+    }
+  }
 }
 
 }  // namespace
 
 void embree_direct_intersect(const Accelerator& embree, const PreparedRays& prepared, std::span<Hit> hits) {
-  const EmbreePrepared& p = direct_loop_input(embree, prepared, false, hits.size());
-  const auto& accel = static_cast<const EmbreeAccel&>(embree);
-  RTCScene scene = accel.scene();
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  if (accel.coherent()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  const size_t n = hits.size();
-  for (size_t i = 0; i < n; ++i) {
-    RTCRayHit rh = p.rayhits[i];
-    rtcIntersect1(scene, &ctx, &rh);
-    write_hit(rh, hits[i]);
-  }
+  direct_loop<false>(embree, prepared, hits);
 }
 
 void embree_direct_occluded(const Accelerator& embree, const PreparedRays& prepared, std::span<uint8_t> occluded) {
-  const EmbreePrepared& p = direct_loop_input(embree, prepared, true, occluded.size());
-  const auto& accel = static_cast<const EmbreeAccel&>(embree);
-  RTCScene scene = accel.scene();
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  if (accel.coherent()) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  const size_t n = occluded.size();
-  for (size_t i = 0; i < n; ++i) {
-    RTCRay ray = p.rays[i];
-    rtcOccluded1(scene, &ctx, &ray);
-    occluded[i] = ray.tfar < 0.0f ? 1 : 0;
-  }
+  direct_loop<true>(embree, prepared, occluded);
 }
 
 bool is_embree_spec(const std::string& spec) { return spec == "embree" || spec.rfind("embree:", 0) == 0; }

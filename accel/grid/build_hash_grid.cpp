@@ -11,6 +11,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "accel/grid/cell_overlap.h"
+#include "accel/grid/exclusive_scan.h"
 #include "accel/grid/grid_build_start.h"
 #include "accel/grid/grid_stats.h"
 
@@ -49,18 +50,7 @@ bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle
     }
   });
   if (over) return false;
-  const uint64_t sum = tbb::parallel_scan(
-      tbb::blocked_range<size_t>(0, n, 1 << 14), uint64_t{0},
-      [&](const tbb::blocked_range<size_t>& r, uint64_t sum, bool is_final) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          const uint64_t c = first[i];
-          if (is_final) first[i] = sum;
-          sum += c;
-        }
-        return sum;
-      },
-      [](uint64_t a, uint64_t b) { return a + b; });
-  first[n] = sum;
+  exclusive_scan_counts(first);
   return true;
 }
 
@@ -69,29 +59,27 @@ bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle
 HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   HashGrid g;
   GridBuildStart start;
-  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
-  const size_t n = start.triangles;
-  const Vec3d &lo = start.lo, &hi = start.hi;
+  if (!start_grid_build(mesh, opt, g, start)) return g;
   // Empty cells cost no memory, but walking and assigning them costs time:
   // the cells are capped at 8 per byte of budget (2^33 for the default
   // 1 GiB), far above any density the rule asks for in practice.
-  const uint64_t budget = start.budget;
-  const uint64_t max_cells = std::max<uint64_t>(1, budget * 8);
+  const uint64_t max_cells = std::max<uint64_t>(1, start.budget * 8);
   ChosenResolution chosen = start.first_resolution(opt, max_cells);
   // The build's peak: the (key, id) pairs, the references and the table
   // (32 bytes per occupied cell) must fit the budget.
-  const uint64_t max_refs = std::min<uint64_t>(budget / (sizeof(KeyRef) + sizeof(uint32_t)), UINT32_MAX);
+  const uint64_t max_refs = std::min<uint64_t>(start.budget / (sizeof(KeyRef) + sizeof(uint32_t)), UINT32_MAX);
 
+  const auto key_of = [](const KeyRef& p) { return p.key; };
   std::vector<uint64_t> first;
   std::vector<KeyRef> pairs;
   size_t occupied = 0;
   while (true) {
-    g.dda = make_dda_grid(lo, hi, chosen.res);
+    g.dda = make_dda_grid(start.lo, start.hi, chosen.res);
     if (count_pairs(g.dda, opt.assign, g.tris, max_refs, first)) {
       // Pass 3: fill the (key, id) pairs, then sort them by cell.
-      pairs.resize(first[n]);
+      pairs.resize(first[start.triangles]);
       const DdaGrid& dda = g.dda;
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, start.triangles, kTriangleGrain), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
           uint64_t slot = first[i];
           for_each_assigned_cell(dda, opt.assign, g.tris[i].p0, g.tris[i].p1, g.tris[i].p2,
@@ -103,54 +91,28 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
       });
       tbb::parallel_sort(pairs.begin(), pairs.end());
       // Runs of equal keys -> occupied cells.
-      occupied = 0;
-      for (size_t i = 0; i < pairs.size(); ++i) occupied += (i == 0 || pairs[i].key != pairs[i - 1].key);
+      occupied = count_key_runs(pairs, key_of);
       const uint64_t peak = pairs.size() * (sizeof(KeyRef) + sizeof(uint32_t)) + 2 * occupied * sizeof(CellSlot);
-      if (peak <= budget) break;
+      if (peak <= start.budget) break;
     }
     std::vector<KeyRef>().swap(pairs);
-    if (total_cells(chosen.res) == 1)
-      throw std::runtime_error(fmt::format(
-          "hashgrid: a memory budget of {} MiB cannot hold the references of {} triangles", opt.budget_mib, n));
-    const ChosenResolution smaller = start.smaller_resolution(opt, chosen, max_cells);
-    chosen.res = smaller.res;
-    chosen.lambda = smaller.lambda;
-    chosen.capped = true;
+    start.shrink(opt, chosen, max_cells, "hashgrid", "references");
   }
   std::vector<uint64_t>().swap(first);
-  if (chosen.capped) {
-    const std::string requested = opt.res ? "res=" + format_grid_resolution(*opt.res) : fmt::format("density={}", opt.density);
-    const std::string used = opt.res ? "res=" + format_grid_resolution(chosen.res)
-                                     : fmt::format("density={:.4g} (res={})", chosen.lambda, format_grid_resolution(chosen.res));
-    warn_budget_capped("hashgrid", requested, used, opt.budget_mib);
-  }
+  start.warn_if_capped(opt, chosen, "hashgrid");
 
   const uint64_t total = pairs.size();
-  g.table = CellHashTable(occupied);
-  g.refs.resize(total);
-  uint64_t probe_sum = 0;
-  uint32_t probe_max = 0, max_per_cell = 0;
-  for (size_t i = 0; i < pairs.size();) {
-    size_t j = i;
-    while (j < pairs.size() && pairs[j].key == pairs[i].key) {
-      g.refs[j] = pairs[j].id;
-      ++j;
-    }
-    const uint32_t count = static_cast<uint32_t>(j - i);
-    const uint32_t probes = g.table.insert(pairs[i].key, static_cast<uint32_t>(i), count);
-    probe_sum += probes;
-    probe_max = std::max(probe_max, probes);
-    max_per_cell = std::max(max_per_cell, count);
-    i = j;
-  }
+  const CellTableFigures table =
+      fill_cell_table(pairs, occupied, key_of, [](const KeyRef& p) { return p.id; }, g.table, g.refs);
 
-  add_occupancy_stats(stats, total_cells(chosen.res), occupied, total, max_per_cell, n);
+  add_occupancy_stats(stats, total_cells(chosen.res), occupied, total, table.max_list, start.triangles);
   add_resolution_stats(stats, chosen.res, opt.res ? 0.0 : chosen.lambda, opt.res ? 0.0 : opt.density);
   stats.extra["budget_capped"] = chosen.capped ? 1.0 : 0.0;
   stats.extra["hash_capacity"] = static_cast<double>(g.table.capacity());
   stats.extra["hash_load"] = static_cast<double>(occupied) / static_cast<double>(g.table.capacity());
-  stats.extra["hash_mean_probes"] = occupied ? static_cast<double>(probe_sum) / static_cast<double>(occupied) : 0.0;
-  stats.extra["hash_max_probes"] = probe_max;
+  stats.extra["hash_mean_probes"] =
+      occupied ? static_cast<double>(table.probe_sum) / static_cast<double>(occupied) : 0.0;
+  stats.extra["hash_max_probes"] = table.max_probes;
   stats.max_depth = 1;
   stats.avg_depth = 1.0;
   stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle) +

@@ -13,29 +13,17 @@ namespace raylab {
 ImplicitGrid build_implicit_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   ImplicitGrid g;
   GridBuildStart start;
-  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
-  const size_t n = start.triangles;
-  g.words = (n + 63) / 64;
+  if (!start_grid_build(mesh, opt, g, start)) return g;
+  g.words = (start.triangles + 63) / 64;
   // Slab bits: (nx + ny + nz) * words * 8 bytes must fit the budget.
   const uint64_t max_cells = std::max<uint64_t>(1, start.budget / 2 / sizeof(uint32_t) - 1);
   ChosenResolution chosen = start.first_resolution(opt, max_cells);
   while (true) {
     const uint64_t slabs = static_cast<uint64_t>(chosen.res[0]) + chosen.res[1] + chosen.res[2];
     if (slabs * g.words * sizeof(uint64_t) <= start.budget) break;
-    if (total_cells(chosen.res) == 1)
-      throw std::runtime_error(fmt::format(
-          "grid:storage=implicit: a memory budget of {} MiB cannot hold the slab bits of {} triangles", opt.budget_mib, n));
-    const ChosenResolution smaller = start.smaller_resolution(opt, chosen, max_cells);
-    chosen.res = smaller.res;
-    chosen.lambda = smaller.lambda;
-    chosen.capped = true;
+    start.shrink(opt, chosen, max_cells, "grid:storage=implicit", "slab bits");
   }
-  if (chosen.capped) {
-    const std::string requested = opt.res ? "res=" + format_grid_resolution(*opt.res) : fmt::format("density={}", opt.density);
-    const std::string used = opt.res ? "res=" + format_grid_resolution(chosen.res)
-                                     : fmt::format("density={:.4g} (res={})", chosen.lambda, format_grid_resolution(chosen.res));
-    warn_budget_capped("grid:storage=implicit", requested, used, opt.budget_mib);
-  }
+  start.warn_if_capped(opt, chosen, "grid:storage=implicit");
   g.dda = make_dda_grid(start.lo, start.hi, chosen.res);
   const size_t slabs = static_cast<size_t>(g.dda.res[0]) + g.dda.res[1] + g.dda.res[2];
   g.bits.assign(slabs * g.words, 0);
@@ -43,7 +31,7 @@ ImplicitGrid build_implicit_grid(const TriangleMesh& mesh, const GridOptions& op
   // Each axis in parallel over slabs would race on words; triangles are
   // processed in word-sized runs instead, so every task owns its words.
   tbb::parallel_for(size_t{0}, g.words, [&](size_t w) {
-    const size_t end = std::min(n, (w + 1) * 64);
+    const size_t end = std::min(start.triangles, (w + 1) * 64);
     for (size_t i = w * 64; i < end; ++i) {
       const LeafTriangle& t = g.tris[i];
       for (int a = 0; a < 3; ++a) {

@@ -299,7 +299,7 @@ void add_two_level_stats(const TwoLevelGrid& g, const ChosenResolution& top, siz
 TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   TwoLevelGrid g;
   GridBuildStart start;
-  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
+  if (!start_grid_build(mesh, opt, g, start)) return g;
   const size_t n = start.triangles;
   CellLists top_lists;
   const ChosenResolution top = build_top_level(start, opt, g, top_lists);

@@ -13,41 +13,27 @@ namespace raylab {
 UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
   UniformGrid g;
   GridBuildStart start;
-  if (!start_grid_build(mesh, opt, g.tris, g.empty, start)) return g;
-  const size_t n = start.triangles;
-  const Vec3d &lo = start.lo, &hi = start.hi;
-
+  if (!start_grid_build(mesh, opt, g, start)) return g;
   // Cells (one 4-byte offset each) may take half of the budget; the
   // references must fit in what the offsets leave.
   const uint64_t budget = start.budget;
   const uint64_t max_cells = std::max<uint64_t>(1, budget / 2 / sizeof(uint32_t) - 1);
   ChosenResolution chosen = start.first_resolution(opt, max_cells);
 
-  std::vector<uint32_t> ids(n);
+  std::vector<uint32_t> ids(start.triangles);
   std::iota(ids.begin(), ids.end(), 0u);
   while (true) {
-    g.dda = make_dda_grid(lo, hi, chosen.res);
+    g.dda = make_dda_grid(start.lo, start.hi, chosen.res);
     const uint64_t offset_bytes = (g.dda.cells() + 1) * sizeof(uint32_t);
     const uint64_t max_refs = budget > offset_bytes ? (budget - offset_bytes) / sizeof(uint32_t) : 0;
     if (build_cell_lists(g.dda, opt.assign, g.tris, ids, max_refs, g.lists)) break;
-    if (total_cells(chosen.res) == 1)
-      throw std::runtime_error(fmt::format("grid: a memory budget of {} MiB cannot hold the references of {} triangles",
-                                           opt.budget_mib, n));
     // Too many references: halve the cells and try again.
-    const ChosenResolution smaller = start.smaller_resolution(opt, chosen, max_cells);
-    chosen.res = smaller.res;
-    chosen.lambda = smaller.lambda;
-    chosen.capped = true;
+    start.shrink(opt, chosen, max_cells, "grid", "references");
   }
-  if (chosen.capped) {
-    const std::string requested = opt.res ? "res=" + format_grid_resolution(*opt.res) : fmt::format("density={}", opt.density);
-    const std::string used = opt.res ? "res=" + format_grid_resolution(chosen.res)
-                                     : fmt::format("density={:.4g} (res={})", chosen.lambda, format_grid_resolution(chosen.res));
-    warn_budget_capped("grid", requested, used, opt.budget_mib);
-  }
+  start.warn_if_capped(opt, chosen, "grid");
 
   const CellOccupancy occ = measure_occupancy(g.lists.offsets);
-  add_occupancy_stats(stats, occ.cells, occ.nonempty, occ.refs, occ.max_per_cell, n);
+  add_occupancy_stats(stats, occ.cells, occ.nonempty, occ.refs, occ.max_per_cell, start.triangles);
   add_resolution_stats(stats, chosen.res, opt.res ? 0.0 : chosen.lambda, opt.res ? 0.0 : opt.density);
   stats.extra["budget_capped"] = chosen.capped ? 1.0 : 0.0;
   stats.max_depth = 1;

@@ -75,4 +75,42 @@ class CellHashTable {
   std::vector<CellSlot> slots_;
 };
 
+// The number of runs of equal keys in pairs sorted by key.
+template <typename Pair, typename KeyOf>
+size_t count_key_runs(const std::vector<Pair>& pairs, KeyOf key) {
+  size_t runs = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) runs += (i == 0 || key(pairs[i]) != key(pairs[i - 1]));
+  return runs;
+}
+
+struct CellTableFigures {
+  uint64_t probe_sum = 0;  // over the occupied cells
+  uint32_t max_probes = 0;
+  uint32_t max_list = 0;  // longest cell list
+};
+
+// The cells of (cell key, triangle id) pairs sorted by key, `runs` distinct
+// keys: each run becomes one cell whose list is refs[first, first + count).
+template <typename Pair, typename KeyOf, typename IdOf>
+CellTableFigures fill_cell_table(const std::vector<Pair>& pairs, size_t runs, KeyOf key, IdOf id,
+                                 CellHashTable& table, std::vector<uint32_t>& refs) {
+  table = CellHashTable(runs);
+  refs.resize(pairs.size());
+  CellTableFigures f;
+  for (size_t i = 0; i < pairs.size();) {
+    size_t j = i;
+    while (j < pairs.size() && key(pairs[j]) == key(pairs[i])) {
+      refs[j] = id(pairs[j]);
+      ++j;
+    }
+    const uint32_t count = static_cast<uint32_t>(j - i);
+    const uint32_t probes = table.insert(key(pairs[i]), static_cast<uint32_t>(i), count);
+    f.probe_sum += probes;
+    f.max_probes = std::max(f.max_probes, probes);
+    f.max_list = std::max(f.max_list, count);
+    i = j;
+  }
+  return f;
+}
+
 }  // namespace raylab

@@ -1,5 +1,7 @@
 #include "accel/grid/cell_lists.h"
 
+#include "accel/grid/exclusive_scan.h"
+
 #include <algorithm>
 #include <atomic>
 #include <numeric>
@@ -14,33 +16,6 @@ namespace {
 
 constexpr size_t kTriangleGrain = 256;
 constexpr size_t kCellGrain = 1 << 14;
-
-// Exclusive prefix sum in place: counts[0..n) -> offsets, counts[n] = total.
-void exclusive_scan(std::vector<uint32_t>& v) {
-  const size_t n = v.size() - 1;
-  if (n < 4 * kCellGrain) {
-    uint32_t sum = 0;
-    for (size_t i = 0; i < n; ++i) {
-      const uint32_t c = v[i];
-      v[i] = sum;
-      sum += c;
-    }
-    v[n] = sum;
-    return;
-  }
-  const uint32_t total = tbb::parallel_scan(
-      tbb::blocked_range<size_t>(0, n, kCellGrain), uint32_t{0},
-      [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool is_final) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          const uint32_t c = v[i];
-          if (is_final) v[i] = sum;
-          sum += c;
-        }
-        return sum;
-      },
-      [](uint32_t a, uint32_t b) { return a + b; });
-  v[n] = total;
-}
 
 }  // namespace
 
@@ -74,7 +49,7 @@ bool build_cell_lists(const DdaGrid& g, AssignMode mode, std::span<const LeafTri
   if (over) return false;
 
   // Pass 2: offsets.
-  exclusive_scan(counts);
+  exclusive_scan_counts(counts, kCellGrain);
   out.offsets = std::move(counts);
 
   // Pass 3: fill through per-cell cursors.

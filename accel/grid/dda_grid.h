@@ -40,6 +40,24 @@ struct DdaGrid {
   }
   double boundary(int axis, int64_t c) const { return lo[axis] + static_cast<double>(c) * cell[axis]; }
   int64_t index(int32_t x, int32_t y, int32_t z) const { return x * stride[0] + y * stride[1] + z * stride[2]; }
+
+  // The box of cell (x, y, z), from the same boundaries the DDA uses
+  // (structure outlines; no assignment margin).
+  Aabb cell_box(int64_t x, int64_t y, int64_t z) const {
+    const int64_t c[3] = {x, y, z};
+    Aabb b;
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = static_cast<float>(boundary(a, c[a]));
+      b.hi[a] = static_cast<float>(boundary(a, c[a] + 1));
+    }
+    return b;
+  }
+  // The box of the cell with linear index x + res[0] * (y + res[1] * z).
+  Aabb cell_box_of_index(uint64_t index) const {
+    const uint64_t rx = static_cast<uint64_t>(res[0]), ry = static_cast<uint64_t>(res[1]);
+    return cell_box(static_cast<int64_t>(index % rx), static_cast<int64_t>((index / rx) % ry),
+                    static_cast<int64_t>(index / (rx * ry)));
+  }
 };
 
 // Why the margin is sized from the grid's extent, not its coordinates.

@@ -2,7 +2,11 @@
 // The start every grid builder shares: the triangles copied for the leaves
 // (in id order), the mesh bounds, the padded grid box and the memory budget.
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda_grid.h"
@@ -29,15 +33,41 @@ struct GridBuildStart {
     return opt.res ? cap_resolution(tried.res, total_cells(tried.res) / 2)
                    : choose_resolution(extent, static_cast<double>(triangles), tried.lambda / 2, max_cells);
   }
+
+  // `chosen` did not fit the budget: moves it to the next smaller resolution
+  // (marked capped), or throws when it is one cell already (`owner: a memory
+  // budget of B MiB cannot hold the <what> of N triangles`).
+  void shrink(const GridOptions& opt, ChosenResolution& chosen, uint64_t max_cells, const char* owner,
+              const char* what) const {
+    if (total_cells(chosen.res) == 1)
+      throw std::runtime_error(fmt::format("{}: a memory budget of {} MiB cannot hold the {} of {} triangles", owner,
+                                           opt.budget_mib, what, triangles));
+    const ChosenResolution smaller = smaller_resolution(opt, chosen, max_cells);
+    chosen.res = smaller.res;
+    chosen.lambda = smaller.lambda;
+    chosen.capped = true;
+  }
+
+  // Says once on stderr what the budget lowered, when it did.
+  void warn_if_capped(const GridOptions& opt, const ChosenResolution& chosen, const char* owner) const {
+    if (!chosen.capped) return;
+    const std::string requested =
+        opt.res ? "res=" + format_grid_resolution(*opt.res) : fmt::format("density={}", opt.density);
+    const std::string used = opt.res ? "res=" + format_grid_resolution(chosen.res)
+                                     : fmt::format("density={:.4g} (res={})", chosen.lambda,
+                                                   format_grid_resolution(chosen.res));
+    warn_budget_capped(owner, requested, used, opt.budget_mib);
+  }
 };
 
-// Fills `tris` and `empty`; returns false for an empty mesh (nothing to build).
-inline bool start_grid_build(const TriangleMesh& mesh, const GridOptions& opt, std::vector<LeafTriangle>& tris,
-                             bool& empty, GridBuildStart& s) {
+// Fills the grid's triangle copies and `empty` flag; returns false for an
+// empty mesh (nothing to build).
+template <typename Grid>
+bool start_grid_build(const TriangleMesh& mesh, const GridOptions& opt, Grid& g, GridBuildStart& s) {
   s.triangles = mesh.num_triangles();
-  tris = copy_leaf_triangles(mesh);
-  empty = s.triangles == 0;
-  if (empty) return false;
+  g.tris = copy_leaf_triangles(mesh);
+  g.empty = s.triangles == 0;
+  if (g.empty) return false;
   s.bounds = mesh.bounds();
   padded_grid_box(s.bounds, s.lo, s.hi);
   s.extent = (s.bounds.hi - s.bounds.lo).cast<double>();

@@ -22,6 +22,34 @@ double largest_extent(const LeafTriangle& t) {
 
 }  // namespace
 
+namespace {
+
+// Level of each triangle: the finest whose cell side covers its extent;
+// sets g.finest_cell (the smallest extent, >= 2^-18 of the scene). Returns
+// the coarsest level used.
+int assign_levels(Hgrid& g, double ratio, double scene_side, std::vector<uint8_t>& level) {
+  const size_t n = g.tris.size();
+  std::vector<double> extent(n);
+  tbb::parallel_for(size_t{0}, n, [&](size_t i) { extent[i] = largest_extent(g.tris[i]); });
+  const double smallest = *std::min_element(extent.begin(), extent.end());
+  g.finest_cell = std::max(smallest, scene_side * 0x1p-18);
+  level.resize(n);
+  int top = 0;
+  for (size_t i = 0; i < n; ++i) {
+    int l = extent[i] > g.finest_cell
+                ? static_cast<int>(std::ceil(std::log(extent[i] / g.finest_cell) / std::log(ratio)))
+                : 0;
+    l = std::clamp(l, 0, kHgridMaxLevels - 1);
+    while (l + 1 < kHgridMaxLevels && level_cell(g.finest_cell, ratio, l) < extent[i]) ++l;
+    while (l > 0 && level_cell(g.finest_cell, ratio, l - 1) >= extent[i]) --l;
+    level[i] = static_cast<uint8_t>(l);
+    top = std::max(top, l);
+  }
+  return top;
+}
+
+}  // namespace
+
 Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats& stats) {
   Hgrid g;
   g.ratio = opt.ratio;
@@ -37,23 +65,8 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
   const double scene_side = (hi - lo).maxCoeff();
   const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
 
-  // Level of each triangle: the finest whose cell side covers its extent.
-  std::vector<double> extent(n);
-  tbb::parallel_for(size_t{0}, n, [&](size_t i) { extent[i] = largest_extent(g.tris[i]); });
-  const double smallest = *std::min_element(extent.begin(), extent.end());
-  g.finest_cell = std::max(smallest, scene_side * 0x1p-18);
-  std::vector<uint8_t> level(n);
-  int top = 0;
-  for (size_t i = 0; i < n; ++i) {
-    int l = extent[i] > g.finest_cell
-                ? static_cast<int>(std::ceil(std::log(extent[i] / g.finest_cell) / std::log(opt.ratio)))
-                : 0;
-    l = std::clamp(l, 0, kHgridMaxLevels - 1);
-    while (l + 1 < kHgridMaxLevels && level_cell(g.finest_cell, opt.ratio, l) < extent[i]) ++l;
-    while (l > 0 && level_cell(g.finest_cell, opt.ratio, l - 1) >= extent[i]) --l;
-    level[i] = static_cast<uint8_t>(l);
-    top = std::max(top, l);
-  }
+  std::vector<uint8_t> level;
+  const int top = assign_levels(g, opt.ratio, scene_side, level);
 
   // Pass 1: each level's box of occupied cells, on the level's lattice from lo.
   const bool pad = opt.neighbours == HgridNeighbours::Pad;
@@ -121,23 +134,11 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
           pairs.emplace_back(hgrid_key(L.level, dg.index(x, y, z)), static_cast<uint32_t>(i));
   }
   tbb::parallel_sort(pairs.begin(), pairs.end());
-  size_t occupied = 0;
-  for (size_t i = 0; i < pairs.size(); ++i) occupied += (i == 0 || pairs[i].first != pairs[i - 1].first);
+  const auto key = [](const std::pair<uint64_t, uint32_t>& p) { return p.first; };
+  const size_t occupied = count_key_runs(pairs, key);
   if (pairs.size() > UINT32_MAX) throw std::length_error("hgrid: more than 2^32 cell references");
-  g.cells = CellHashTable(occupied);
-  g.refs.resize(pairs.size());
-  size_t max_probes = 0, max_list = 0;
-  for (size_t i = 0; i < pairs.size();) {
-    size_t j = i;
-    while (j < pairs.size() && pairs[j].first == pairs[i].first) {
-      g.refs[j] = pairs[j].second;
-      ++j;
-    }
-    max_probes = std::max<size_t>(max_probes, g.cells.insert(pairs[i].first, static_cast<uint32_t>(i),
-                                                             static_cast<uint32_t>(j - i)));
-    max_list = std::max(max_list, j - i);
-    i = j;
-  }
+  const CellTableFigures table = fill_cell_table(
+      pairs, occupied, key, [](const std::pair<uint64_t, uint32_t>& p) { return p.second; }, g.cells, g.refs);
 
   double walkable = 0.0;
   for (const HgridLevel& L : g.levels) walkable += static_cast<double>(L.grid.cells());
@@ -152,8 +153,8 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
   stats.extra["references"] = static_cast<double>(pairs.size());
   stats.extra["refs_per_triangle"] = static_cast<double>(pairs.size()) / static_cast<double>(n);
   stats.extra["walkable_cells"] = walkable;
-  stats.extra["max_cell_size"] = static_cast<double>(max_list);
-  stats.extra["max_probes"] = static_cast<double>(max_probes);
+  stats.extra["max_cell_size"] = static_cast<double>(table.max_list);
+  stats.extra["max_probes"] = static_cast<double>(table.max_probes);
   return g;
 }
 

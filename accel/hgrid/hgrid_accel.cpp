@@ -2,7 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "accel/core/batch_accelerator.h"
+#include "accel/core/view_accelerator.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/hgrid/build_hgrid.h"
 #include "accel/hgrid/traverse_hgrid.h"
@@ -12,48 +13,27 @@ namespace raylab {
 
 namespace {
 
-// The box of cell (x, y, z) of a level's grid.
-Aabb level_cell_box(const DdaGrid& g, int64_t x, int64_t y, int64_t z) {
-  const int64_t c[3] = {x, y, z};
-  Aabb b;
-  for (int a = 0; a < 3; ++a) {
-    b.lo[a] = static_cast<float>(g.boundary(a, c[a]));
-    b.hi[a] = static_cast<float>(g.boundary(a, c[a] + 1));
-  }
-  return b;
-}
-
-class HgridAccel final : public BatchAccelerator<HgridAccel> {
+class HgridAccel final : public ViewAccelerator<HgridAccel, HgridOptions, Hgrid> {
  public:
-  HgridAccel(const HgridOptions& opt, TriangleTest test) : BatchAccelerator(test), opt_(opt) {}
-
-  template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_hgrid<kTest, kAnyHit, kCount>(grid_, ray, stats);
-  }
+  using ViewAccelerator::ViewAccelerator;
 
   // Depth 0: the scene box; depth k >= 1: the occupied cells of the k-th
   // coarsest occupied level (coarse cells hold the large triangles, as a
   // tree's upper nodes do), clipped to the scene box (a coarse level's cells
   // reach beyond the scene).
   void outline(int max_depth, StructureOutline& out) const override {
-    out.what = "occupied cells per level, coarsest first";
-    if (grid_.empty) return;
-    if (!out.add(OutlineBox{scene_box_, 0, false}) || max_depth < 1) return;
-    const int occupied = static_cast<int>(grid_.levels.size());
-    for (const CellSlot& slot : grid_.cells.slots()) {
+    if (!out.begin("occupied cells per level, coarsest first", view_.empty, scene_box_, max_depth)) return;
+    const int occupied = static_cast<int>(view_.levels.size());
+    for (const CellSlot& slot : view_.cells.slots()) {
       if (slot.key == CellHashTable::kEmptyKey || slot.count == 0) continue;
       const int level = static_cast<int>(slot.key >> kHgridKeyShift);
       const uint64_t local = slot.key & ((uint64_t{1} << kHgridKeyShift) - 1);
       for (int i = 0; i < occupied; ++i) {
-        const HgridLevel& l = grid_.levels[i];
+        const HgridLevel& l = view_.levels[i];
         if (l.level != level) continue;
         const int depth = occupied - i;  // levels are finest first
         if (depth > max_depth) break;
-        const uint64_t rx = static_cast<uint64_t>(l.grid.res[0]), ry = static_cast<uint64_t>(l.grid.res[1]);
-        const int64_t cell[3] = {static_cast<int64_t>(local % rx), static_cast<int64_t>((local / rx) % ry),
-                                 static_cast<int64_t>(local / (rx * ry))};
-        Aabb box = level_cell_box(l.grid, cell[0], cell[1], cell[2]);
+        Aabb box = l.grid.cell_box_of_index(local);
         box.lo = box.lo.cwiseMax(scene_box_.lo);
         box.hi = box.hi.cwiseMin(scene_box_.hi);
         if (!box.is_empty() && !out.add(OutlineBox{box, depth, true})) return;
@@ -65,28 +45,25 @@ class HgridAccel final : public BatchAccelerator<HgridAccel> {
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
     BuildStats s;
-    grid_ = build_hgrid(mesh, opt_, s);
+    view_ = build_hgrid(mesh, opt_, s);
     scene_box_ = mesh.bounds();
     return s;
   }
 
  private:
-  HgridOptions opt_;
-  Hgrid grid_;
   Aabb scene_box_ = Aabb::empty();
 };
 
 }  // namespace
 
 AcceleratorInfo hgrid_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "hgrid",
       "hierarchical grid (Ericson 7.2): levels of cell side ratio^l, each triangle at one level, shared hashed "
       "cells, per-level 3D-DDA merged by distance",
       {{"ratio", "2", "cell side ratio between successive levels, in [1.25, 16]"},
        {"neighbours", "store", "store (list a triangle in each cell of its level it overlaps, <= 8) or pad "
-                               "(list it in its centre's cell; the walk looks up each cell's 3x3x3 neighbourhood)"},
-       triangle_test_param()},
+                               "(list it in its centre's cell; the walk looks up each cell's 3x3x3 neighbourhood)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         HgridOptions opt;
         opt.ratio = p.real("ratio");
@@ -94,9 +71,7 @@ AcceleratorInfo hgrid_accelerator_info() {
         opt.neighbours = p.choice("neighbours", {"store", "pad"}) == "pad" ? HgridNeighbours::Pad
                                                                           : HgridNeighbours::Store;
         return std::make_unique<HgridAccel>(opt, parse_triangle_test(p));
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
+      });
   info.cover = {"hgrid:neighbours=pad"};
   info.stats = {{"occupied_levels", "levels holding triangles"},
                 {"level_span", "levels from the finest to the coarsest occupied one"},

@@ -116,4 +116,8 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
   return q.rec.hit();
 }
 
+// The walk under the name the generic shell calls (accel/core/view_accelerator.h).
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_view(const Hgrid& v, const Ray& ray, TraversalStats* stats) { return traverse_hgrid<kTest, kAnyHit, kCount>(v, ray, stats); }
+
 }  // namespace raylab

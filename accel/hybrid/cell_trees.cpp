@@ -69,15 +69,31 @@ void join_parts(const TopGrid& g, const std::vector<uint32_t>& cells, std::vecto
                    f.cell_tree.size() * sizeof(uint32_t);
 }
 
+// Every occupied cell's part, built in parallel: build_part(cell, part).
+template <typename Node, typename BuildPart>
+std::vector<CellPart<Node>> build_parts(const std::vector<uint32_t>& cells, BuildPart&& build_part) {
+  std::vector<CellPart<Node>> parts(cells.size());
+  tbb::parallel_for(size_t{0}, cells.size(), [&](size_t i) { build_part(cells[i], parts[i]); });
+  return parts;
+}
+
+// One cell tree's shape added to the forest's totals.
+template <typename Shape>
+void add_to_totals(CellTreeTotals& t, const Shape& s, size_t references) {
+  t.nodes += s.nodes;
+  t.leaves += s.leaves;
+  t.references += references;
+  t.max_depth = std::max(t.max_depth, s.max_depth);
+  t.leaf_depth_sum += s.avg_leaf_depth * static_cast<double>(s.leaves);
+}
+
 }  // namespace
 
 CellBvhForest build_cell_bvhs(const TopGrid& g, int leaf) {
   CellBvhForest f;
   if (g.empty) return f;
   const std::vector<uint32_t> cells = occupied_cells(g);
-  std::vector<CellPart<Bvh2Node>> parts(cells.size());
-  tbb::parallel_for(size_t{0}, cells.size(), [&](size_t i) {
-    const uint32_t cell = cells[i];
+  auto parts = build_parts<Bvh2Node>(cells, [&](uint32_t cell, CellPart<Bvh2Node>& p) {
     int32_t c[3];
     cell_coords(g.dda, cell, c);
     const Aabb cell_box = top_cell_box(g.dda, c[0], c[1], c[2]);
@@ -100,19 +116,11 @@ CellBvhForest build_cell_bvhs(const TopGrid& g, int leaf) {
     bo.max_leaf = leaf;
     bo.leaf_threshold = 1;
     BinaryBvh tree = build_binned_sah(std::move(refs), bo);
-    CellPart<Bvh2Node>& p = parts[i];
     p.nodes = std::move(tree.nodes);
     p.tris.reserve(tree.prim_ids.size());
     for (const uint32_t id : tree.prim_ids) p.tris.push_back(g.tris[id]);
   });
-  for (const auto& p : parts) {
-    const TreeShape s = measure_tree(p.nodes);
-    f.totals.nodes += s.nodes;
-    f.totals.leaves += s.leaves;
-    f.totals.references += p.tris.size();
-    f.totals.max_depth = std::max(f.totals.max_depth, s.max_depth);
-    f.totals.leaf_depth_sum += s.avg_leaf_depth * static_cast<double>(s.leaves);
-  }
+  for (const auto& p : parts) add_to_totals(f.totals, measure_tree(p.nodes), p.tris.size());
   join_parts(g, cells, parts, f, [](const Bvh2Node* nodes, const LeafTriangle* tris, const uint32_t*, const auto& p) {
     return Bvh2View{nodes, tris, p.tris.empty()};
   });
@@ -123,13 +131,10 @@ CellKdForest build_cell_kdtrees(const TopGrid& g, const KdBuildOptions& options)
   CellKdForest f;
   if (g.empty) return f;
   const std::vector<uint32_t> cells = occupied_cells(g);
-  std::vector<CellPart<KdNode>> parts(cells.size());
-  tbb::parallel_for(size_t{0}, cells.size(), [&](size_t i) {
-    const uint32_t cell = cells[i];
+  auto parts = build_parts<KdNode>(cells, [&](uint32_t cell, CellPart<KdNode>& p) {
     const uint32_t begin = g.lists.offsets[cell], end = g.lists.offsets[cell + 1];
     // The cell's triangles as a small mesh of their own (local ids).
     TriangleMesh sub;
-    CellPart<KdNode>& p = parts[i];
     for (uint32_t k = begin; k < end; ++k) {
       const LeafTriangle& t = g.tris[g.lists.refs[k]];
       const uint32_t v = static_cast<uint32_t>(sub.vertices.size());
@@ -144,11 +149,7 @@ CellKdForest build_cell_kdtrees(const TopGrid& g, const KdBuildOptions& options)
   });
   for (const auto& p : parts) {
     const KdTreeShape s = measure_kdtree(p.bounds, p.nodes);
-    f.totals.nodes += s.nodes;
-    f.totals.leaves += s.leaves;
-    f.totals.references += s.references;
-    f.totals.max_depth = std::max(f.totals.max_depth, s.max_depth);
-    f.totals.leaf_depth_sum += s.avg_leaf_depth * static_cast<double>(s.leaves);
+    add_to_totals(f.totals, s, s.references);
   }
   join_parts(g, cells, parts, f, [](const KdNode* nodes, const LeafTriangle* tris, const uint32_t* ids, const auto& p) {
     return KdTreeView{nodes, tris, ids, p.bounds, p.tris.empty()};

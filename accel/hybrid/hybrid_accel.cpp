@@ -5,6 +5,8 @@
 #include <fmt/format.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/tree_stats.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/hybrid/traverse_entry_grid.h"
 #include "accel/hybrid/traverse_grid_of_trees.h"
@@ -31,8 +33,7 @@ void add_top_stats(BuildStats& s, const TopGrid& top, size_t triangles) {
   s.extra["res_z"] = top.dda.res[2];
   s.extra["density_used"] = top.density;
   if (!top.lists.offsets.empty()) {
-    s.extra["top_refs_per_triangle"] =
-        triangles ? static_cast<double>(top.lists.refs.size()) / static_cast<double>(triangles) : 0.0;
+    s.extra["top_refs_per_triangle"] = per_triangle(top.lists.refs.size(), triangles);
   }
 }
 
@@ -98,7 +99,7 @@ class GridOfTreesAccel final : public BatchAccelerator<GridOfTreesAccel<Forest>>
     s.bytes = t.bytes + sizeof(*this);
     add_top_stats(s, top_, n);
     s.extra["trees"] = static_cast<double>(t.trees);
-    s.extra["refs_per_triangle"] = n ? static_cast<double>(t.references) / static_cast<double>(n) : 0.0;
+    s.extra["refs_per_triangle"] = per_triangle(t.references, n);
     s.extra["tree_nodes"] = static_cast<double>(t.nodes);
     top_.lists = CellLists{};
     top_.tris = {};
@@ -152,7 +153,7 @@ class EntryGridAccel final : public BatchAccelerator<EntryGridAccel> {
     }
     s.extra["entry_avg_depth"] = grid_.entry.empty() ? 0.0 : depth_sum / static_cast<double>(grid_.entry.size());
     s.extra["entry_at_root"] = static_cast<double>(at_root);
-    s.extra["refs_per_triangle"] = n ? static_cast<double>(shape.references) / static_cast<double>(n) : 0.0;
+    s.extra["refs_per_triangle"] = per_triangle(shape.references, n);
     return s;
   }
 
@@ -165,15 +166,14 @@ class EntryGridAccel final : public BatchAccelerator<EntryGridAccel> {
 }  // namespace
 
 AcceleratorInfo hybrid_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "hybrid",
       "hybrid schemes: a coarse grid of small BVHs / k-d trees (3D-DDA, each tree traced over its cell's interval), "
       "or a grid of entry nodes into one k-d tree",
       {{"top", "grid", "top level: grid (a uniform grid by the n^(1/3) rule; the only top level so far)"},
        {"inner", "bvh", "bvh or kdtree (one tree per non-empty cell), or entry (one k-d tree + grid of entry nodes)"},
        {"density", "0.0625", "top cells per triangle (lambda of the n^(1/3) rule), in (0, 64]"},
-       {"leaf", "4", "inner=bvh: largest leaf of the cell BVHs (1..64)"},
-       triangle_test_param()},
+       {"leaf", "4", "inner=bvh: largest leaf of the cell BVHs (1..64)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         HybridConfig c;
         p.choice("top", {"grid"});
@@ -188,9 +188,7 @@ AcceleratorInfo hybrid_accelerator_info() {
         if (c.inner == InnerKind::Bvh) return std::make_unique<GridOfTreesAccel<CellBvhForest>>(c);
         if (c.inner == InnerKind::KdTree) return std::make_unique<GridOfTreesAccel<CellKdForest>>(c);
         return std::make_unique<EntryGridAccel>(c);
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
+      });
   info.cover = {"hybrid:inner=kdtree", "hybrid:inner=entry", "hybrid:tri=mt"};
   info.stats = {{"top_cells", "cells of the top grid"},
                 {"res_x", "top grid cells along x"},

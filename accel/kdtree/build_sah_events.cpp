@@ -94,7 +94,6 @@ struct SplitPlane {
 // Wald & Havran 2006 has no such rule; it is this implementation's guard.
 
 // Triangles in a node from which its two subtrees are built as tasks.
-constexpr size_t kParallelTaskSize = 1024;
 // Triangles in a node from which its three axes are swept and split in parallel.
 constexpr size_t kParallelNodeSize = 65536;
 
@@ -109,20 +108,18 @@ class SahEventBuilder : KdBuilderBase {
   using KdBuilderBase::KdBuilderBase;
 
   KdTree run() {
-    if (!start(kTriMask)) return empty_kdtree(writer_);
-    const size_t n = mesh_.num_triangles();
-    const Aabb bounds = kd_triangle_boxes(mesh_, tri_boxes_);
-
-    // The root's events come from the triangles' boxes (the root cell holds
-    // them all), sorted once; from here on lists are only split and merged.
-    NodeEvents root;
-    root.triangles = n;
-    for (int k = 0; k < 3; ++k) root.axis[k].reserve(2 * n);
-    for (size_t i = 0; i < n; ++i) add_events(static_cast<uint32_t>(i), tri_boxes_[i], root.axis);
-    for (int k = 0; k < 3; ++k) tbb::parallel_sort(root.axis[k].begin(), root.axis[k].end());
-
-    build(0, bounds, std::move(root), 0);
-    return writer_.finish(bounds);
+    return run_from_root(kTriMask, [&](const Aabb& bounds) {
+      // The root's events come from the triangles' boxes (the root cell
+      // holds them all), sorted once; from here on lists are only split and
+      // merged.
+      const size_t n = mesh_.num_triangles();
+      NodeEvents root;
+      root.triangles = n;
+      for (int k = 0; k < 3; ++k) root.axis[k].reserve(2 * n);
+      for (size_t i = 0; i < n; ++i) add_events(static_cast<uint32_t>(i), tri_boxes_[i], root.axis);
+      for (int k = 0; k < 3; ++k) tbb::parallel_sort(root.axis[k].begin(), root.axis[k].end());
+      build(0, bounds, std::move(root), 0);
+    });
   }
 
  private:
@@ -156,13 +153,9 @@ class SahEventBuilder : KdBuilderBase {
 
     const uint32_t pair = writer_.allocate_pair();
     writer_.set_inner(node, best.axis, best.pos, pair);
-    if (n >= kParallelTaskSize) {
-      tbb::parallel_invoke([&] { build(pair, left_cell, std::move(left), depth + 1); },
-                           [&] { build(pair + 1, right_cell, std::move(right), depth + 1); });
-    } else {
-      build(pair, left_cell, std::move(left), depth + 1);
-      build(pair + 1, right_cell, std::move(right), depth + 1);
-    }
+    build_children(
+        n, [&] { build(pair, left_cell, std::move(left), depth + 1); },
+        [&] { build(pair + 1, right_cell, std::move(right), depth + 1); });
   }
 
   void make_leaf(uint32_t node, const NodeEvents& ev) {
@@ -323,7 +316,6 @@ class SahEventBuilder : KdBuilderBase {
     }
   }
 
-  std::vector<Aabb> tri_boxes_;
   // Per-thread working memory, reused from node to node: the classification
   // array indexed by triangle id (the paper's per-triangle flag) and the
   // lists of straddling triangles and their new events. Only touched between

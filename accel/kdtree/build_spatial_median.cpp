@@ -22,21 +22,17 @@ struct PrimRef {
   Aabb box;
 };
 
-constexpr size_t kParallelTaskSize = 1024;
 
 class MedianBuilder : KdBuilderBase {
  public:
   using KdBuilderBase::KdBuilderBase;
 
   KdTree run() {
-    if (!start(kKdMaxIndex)) return empty_kdtree(writer_);
-    const size_t n = mesh_.num_triangles();
-    std::vector<Aabb> boxes;
-    const Aabb bounds = kd_triangle_boxes(mesh_, boxes);
-    std::vector<PrimRef> refs(n);
-    for (size_t i = 0; i < n; ++i) refs[i] = PrimRef{static_cast<uint32_t>(i), boxes[i]};
-    build(0, bounds, std::move(refs), 0);
-    return writer_.finish(bounds);
+    return run_from_root(kKdMaxIndex, [&](const Aabb& bounds) {
+      std::vector<PrimRef> refs(mesh_.num_triangles());
+      for (size_t i = 0; i < refs.size(); ++i) refs[i] = PrimRef{static_cast<uint32_t>(i), tri_boxes_[i]};
+      build(0, bounds, std::move(refs), 0);
+    });
   }
 
  private:
@@ -109,13 +105,9 @@ class MedianBuilder : KdBuilderBase {
 
     const uint32_t pair = writer_.allocate_pair();
     writer_.set_inner(node, axis, split, pair);
-    if (n >= kParallelTaskSize) {
-      tbb::parallel_invoke([&] { build(pair, left_cell, std::move(left), depth + 1); },
-                           [&] { build(pair + 1, right_cell, std::move(right), depth + 1); });
-    } else {
-      build(pair, left_cell, std::move(left), depth + 1);
-      build(pair + 1, right_cell, std::move(right), depth + 1);
-    }
+    build_children(
+        n, [&] { build(pair, left_cell, std::move(left), depth + 1); },
+        [&] { build(pair + 1, right_cell, std::move(right), depth + 1); });
   }
 
   bool clip_to(uint32_t tri, const Aabb& part, const Aabb& cell, Aabb& out) const {

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include "accel/kdtree/kd_build_options.h"
@@ -29,25 +30,6 @@ inline KdTree empty_kdtree(KdTreeWriter& writer) {
   return writer.finish(Aabb::empty());
 }
 
-// What both builders hold: the mesh, the options, the depth limit in force
-// and the tree being written.
-class KdBuilderBase {
- public:
-  KdBuilderBase(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
-
- protected:
-  // Sets the depth limit; false for an empty mesh (then return empty_kdtree(writer_)).
-  bool start(size_t max_triangles) {
-    max_depth_ = kd_build_depth_limit(mesh_, opt_, max_triangles);
-    return mesh_.num_triangles() != 0;
-  }
-
-  const TriangleMesh& mesh_;
-  KdBuildOptions opt_;
-  int max_depth_ = 0;
-  KdTreeWriter writer_;
-};
-
 // boxes[i] = the bounds of triangle i; returns their union.
 inline Aabb kd_triangle_boxes(const TriangleMesh& mesh, std::vector<Aabb>& boxes) {
   boxes.resize(mesh.num_triangles());
@@ -62,5 +44,47 @@ inline Aabb kd_triangle_boxes(const TriangleMesh& mesh, std::vector<Aabb>& boxes
       },
       [](const Aabb& a, const Aabb& b) { return merge(a, b); });
 }
+
+// Subtrees of at least this many triangles are built as parallel tasks.
+inline constexpr size_t kKdParallelTaskSize = 1024;
+
+// Builds both children of a node of n triangles: as two parallel tasks when
+// the node is large, else one after the other.
+template <typename BuildBelow, typename BuildAbove>
+void build_children(size_t n, BuildBelow&& below, BuildAbove&& above) {
+  if (n >= kKdParallelTaskSize) {
+    tbb::parallel_invoke(below, above);
+  } else {
+    below();
+    above();
+  }
+}
+
+// What both builders hold: the mesh, the options, the depth limit in force
+// and the tree being written.
+class KdBuilderBase {
+ public:
+  KdBuilderBase(const TriangleMesh& mesh, const KdBuildOptions& o) : mesh_(mesh), opt_(o) {}
+
+ protected:
+  // The run every builder shares: the depth limit (for trees indexing at
+  // most max_triangles), the triangles' boxes (tri_boxes_), the builder's
+  // recursion from the root (build_root(bounds)) and the finished tree; an
+  // empty mesh gives the empty tree.
+  template <typename BuildRoot>
+  KdTree run_from_root(size_t max_triangles, BuildRoot&& build_root) {
+    max_depth_ = kd_build_depth_limit(mesh_, opt_, max_triangles);
+    if (mesh_.num_triangles() == 0) return empty_kdtree(writer_);
+    const Aabb bounds = kd_triangle_boxes(mesh_, tri_boxes_);
+    build_root(bounds);
+    return writer_.finish(bounds);
+  }
+
+  const TriangleMesh& mesh_;
+  KdBuildOptions opt_;
+  int max_depth_ = 0;
+  KdTreeWriter writer_;
+  std::vector<Aabb> tri_boxes_;  // bounds of each triangle
+};
 
 }  // namespace raylab

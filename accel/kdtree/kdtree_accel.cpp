@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
+#include "accel/core/tree_stats.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
@@ -21,14 +23,13 @@ enum class KdBuilder { Sah, Median };
 class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
   KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd)
-      : BatchAccelerator(test), builder_(builder), opt_(opt), blocks_wanted_(simd && test == TriangleTest::Watertight) {}
+      : BatchAccelerator(test), builder_(builder), opt_(opt), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (view_.blocks) return traverse_kdtree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
-    }
-    return traverse_kdtree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+    return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+    });
   }
   void outline(int max_depth, StructureOutline& out) const override {
     outline_kdtree(view_.bounds, nodes_, max_depth, out);
@@ -38,49 +39,24 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
   BuildStats build_impl(const TriangleMesh& mesh) override {
     KdTree tree = builder_ == KdBuilder::Sah ? build_kdtree_sah(mesh, opt_) : build_kdtree_median(mesh, opt_);
     nodes_ = std::move(tree.nodes);
-    // Each referenced triangle is copied once, in the order the leaves first
-    // use it (neighbouring leaves share cache lines), and leaves keep indices
-    // into that array. On the bunny (5.3 references per triangle) this was
-    // faster than one copy per reference, with half the memory.
-    std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
-    std::vector<uint32_t> first_use;  // triangle ids in the order the leaves first refer to them
-    ids_.resize(tree.prim_ids.size());
-    for (size_t i = 0; i < tree.prim_ids.size(); ++i) {
-      const uint32_t id = tree.prim_ids[i];
-      if (slot[id] == UINT32_MAX) {
-        slot[id] = static_cast<uint32_t>(first_use.size());
-        first_use.push_back(id);
-      }
-      ids_[i] = slot[id];
-    }
     blocks_.clear();
     if (blocks_wanted_) {
       // SIMD leaves replace the indices and the triangle copies.
       blocks_ = make_kd_leaf_blocks(mesh, nodes_, tree.prim_ids);
       ids_.clear();
-      ids_.shrink_to_fit();
     } else {
-      tris_ = copy_leaf_triangles(mesh, first_use);
+      IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.prim_ids);
+      tris_ = std::move(leaf_tris.tris);
+      ids_ = std::move(leaf_tris.ids);
     }
     view_ = KdTreeView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
                        /*root=*/0, blocks_wanted_ ? blocks_.data() : nullptr};
 
-    BuildStats s;
     const KdTreeShape shape = measure_kdtree(tree.bounds, nodes_);
-    const double n = static_cast<double>(mesh.num_triangles());
-    s.nodes = shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
-    s.sah_cost = shape.sah_cost;
+    BuildStats s = tree_build_stats(shape, mesh.num_triangles());
     s.bytes = nodes_.size() * sizeof(KdNode) + tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t) +
               blocks_.size() * sizeof(KdTriangleBlock);
     s.extra["leaf_blocks"] = static_cast<double>(blocks_.size());
-    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
-    s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
-    s.extra["references"] = static_cast<double>(shape.references);
-    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
-    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
     const size_t full_leaves = shape.leaves - shape.empty_leaves;
     s.extra["avg_leaf_size"] = full_leaves ? static_cast<double>(shape.references) / static_cast<double>(full_leaves) : 0.0;
     s.extra["max_depth_limit"] =
@@ -106,11 +82,11 @@ AcceleratorInfo kdtree_accelerator_info() {
       "kdtree",
       "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal",
       {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)"},
-       {"ct", "15", "builder=sah: cost of a traversal step (K_T)"},
-       {"ci", "20", "builder=sah: cost of a triangle test (K_I)"},
+       sah_traversal_cost_param("builder=sah: "),
+       sah_intersection_cost_param("builder=sah: "),
        {"empty_bonus", "0.2", "builder=sah: cost reduction of splits with an empty child, in [0, 1)"},
        {"clip", "1", "perfect splits: clip straddling triangles to the cells (0 = bounding boxes)"},
-       {"max_depth", "auto", "depth limit: auto = 8 + 1.3 log2 N, or 0..64"},
+       depth_limit_param(),
        {"leaf", "2", "builder=median: cells with at most this many triangles become leaves"},
        triangle_test_param(),
        {"simd", "1", "1 = leaves as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar kernels only (same hits)"}},
@@ -123,21 +99,14 @@ AcceleratorInfo kdtree_accelerator_info() {
         } else if (p.given("leaf")) {
           throw SpecError("kdtree: leaf applies to builder=median only (the SAH decides leaf sizes)");
         }
-        const double ct = p.real("ct"), ci = p.real("ci"), bonus = p.real("empty_bonus");
-        if (!(ct >= 0.0 && ct <= 1e6)) throw SpecError("kdtree: ct must be in [0, 1e6]");
-        if (!(ci > 0.0 && ci <= 1e6)) throw SpecError("kdtree: ci must be in (0, 1e6]");
+        const SahCosts costs = parse_sah_costs(p, "kdtree");
+        const double bonus = p.real("empty_bonus");
         if (!(bonus >= 0.0 && bonus < 1.0)) throw SpecError("kdtree: empty_bonus must be in [0, 1)");
-        opt.traversal_cost = static_cast<float>(ct);
-        opt.intersection_cost = static_cast<float>(ci);
+        opt.traversal_cost = costs.traversal;
+        opt.intersection_cost = costs.intersection;
         opt.empty_bonus = static_cast<float>(bonus);
         opt.perfect_splits = p.boolean("clip");
-        if (p.str("max_depth") == "auto") {
-          opt.max_depth = -1;
-        } else {
-          opt.max_depth = p.integer("max_depth");
-          if (opt.max_depth < 0 || opt.max_depth > kKdMaxDepthLimit)
-            throw SpecError(fmt::format("kdtree: max_depth must be auto or in 0..{}", kKdMaxDepthLimit));
-        }
+        opt.max_depth = parse_depth_limit(p, "kdtree", kKdMaxDepthLimit);
         opt.median_leaf_size = p.integer("leaf");
         if (opt.median_leaf_size < 1) throw SpecError("kdtree: leaf must be >= 1");
         return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"));
@@ -146,14 +115,11 @@ AcceleratorInfo kdtree_accelerator_info() {
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
   info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0"};
-  info.stats = {{"inner_nodes", "inner nodes"},
-                {"empty_leaves", "leaves without triangles"},
-                {"references", "triangle references in leaves"},
-                {"refs_per_triangle", "references per triangle (perfect splits duplicate straddling triangles)"},
-                {"max_leaf_size", "largest leaf, in triangles"},
-                {"avg_leaf_size", "mean references per non-empty leaf"},
-                {"max_depth_limit", "the depth limit in force (auto: 8 + 1.3 log2 N)"},
-                {"leaf_blocks", "SIMD triangle blocks of the leaves (0 with simd=0 or tri=mt)"}};
+  info.stats = tree_stat_infos("triangle references in leaves",
+                               "references per triangle (perfect splits duplicate straddling triangles)",
+                               {{"avg_leaf_size", "mean references per non-empty leaf"},
+                                {"max_depth_limit", "the depth limit in force (auto: 8 + 1.3 log2 N)"},
+                                {"leaf_blocks", "SIMD triangle blocks of the leaves (0 with simd=0 or tri=mt)"}});
   info.build_peak_bytes_per_triangle = 700;  // measured 667 on soup:n=10^7 (resident-set growth over the build)
   return info;
 }

@@ -14,17 +14,12 @@ KdTreeShape measure_kdtree(const Aabb& bounds, std::span<const KdNode> nodes) {
     int depth;
     Aabb cell;
   };
-  std::vector<Item> stack{{0, 0, bounds}};
   SahTally tally;
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
+  walk_depth_first(Item{0, 0, bounds}, [&](const Item& it, auto&& push) {
     const KdNode& n = nodes[it.node];
-    s.nodes++;
-    s.max_depth = std::max(s.max_depth, it.depth);
+    tally.node(it.depth);
     const double area = it.cell.half_area();
     if (n.is_leaf()) {
-      s.leaves++;
       if (n.count() == 0) s.empty_leaves++;
       s.references += n.count();
       s.max_leaf_size = std::max<size_t>(s.max_leaf_size, n.count());
@@ -35,12 +30,11 @@ KdTreeShape measure_kdtree(const Aabb& bounds, std::span<const KdNode> nodes) {
       Aabb below = it.cell, above = it.cell;
       below.hi[n.axis()] = n.split();
       above.lo[n.axis()] = n.split();
-      stack.push_back({n.child(), it.depth + 1, below});
-      stack.push_back({n.child() + 1, it.depth + 1, above});
+      push({n.child(), it.depth + 1, below});
+      push({n.child() + 1, it.depth + 1, above});
     }
-  }
-  s.avg_leaf_depth = tally.avg_leaf_depth();
-  s.sah_cost = tally.sah_cost(root_area);
+  });
+  tally.fill(s, root_area);
   return s;
 }
 

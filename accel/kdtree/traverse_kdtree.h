@@ -48,6 +48,7 @@
 
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/core/traversal_stack.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/kdtree/kdtree_node.h"
 
@@ -135,13 +136,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   using LeafRay = std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, TrianglePrecompute<kTest>>;
   const LeafRay pre(ray);
 
-  struct Entry {
-    uint32_t node;
-    float t0, t1;
-  };
-  // One entry per inner node on the current path at most.
-  Entry stack[kKdMaxDepthLimit];
-  int sp = 0;
+  IntervalStack<kKdMaxDepthLimit> stack;
   uint32_t node = tree.root;
 
   while (true) {
@@ -157,15 +152,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       // bit set, -0 included) is above the plane first.
       const uint32_t near = n.child() + neg[k];
       const uint32_t far = n.child() + 1u - neg[k];
-      const bool visit_near = !(t_near_end < t0);
-      const bool visit_far = !(t_far_start > t1);
-      // Branch-free: the far entry is always written but only kept when
-      // both children are visited. With one child only the interval stays
-      // as it is (the padded plane lies outside it).
-      stack[sp] = Entry{far, t_far_start > t0 ? t_far_start : t0, t1};
-      sp += (visit_near && visit_far) ? 1 : 0;
-      t1 = (visit_near && t_near_end < t1) ? t_near_end : t1;
-      node = visit_near ? near : far;
+      node = stack.descend(near, far, t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
 
@@ -179,19 +166,8 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       if (kept) return rec.hit();
     }
 
-    // Next cell that can still hold a closer hit; cells starting beyond the
-    // closest hit so far (plus the test's distance error) are dropped.
-    const float t_bound = rec.tmax() + delta_t;
-    while (true) {
-      if (sp == 0) return rec.hit();
-      const Entry& e = stack[--sp];
-      if (e.t0 <= t_bound) {
-        node = e.node;
-        t0 = e.t0;
-        t1 = e.t1 < t_bound ? e.t1 : t_bound;
-        break;
-      }
-    }
+    // Next cell that can still hold a closer hit (plus the test's distance error).
+    if (!stack.pop_within(rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
   }
 }
 

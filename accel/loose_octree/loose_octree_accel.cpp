@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
+#include "accel/core/tree_stats.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/loose_octree/build_loose_octree.h"
 #include "accel/loose_octree/traverse_loose_octree.h"
@@ -14,14 +17,13 @@ namespace {
 class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
  public:
   LooseOctreeAccel(const LooseOctreeOptions& opt, TriangleTest test, bool simd)
-      : BatchAccelerator(test), opt_(opt), blocks_wanted_(simd && test == TriangleTest::Watertight) {}
+      : BatchAccelerator(test), opt_(opt), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (view_.blocks) return traverse_loose_octree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
-    }
-    return traverse_loose_octree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+    return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      return traverse_loose_octree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+    });
   }
 
   // raylab show: the loose boxes of the nodes down to max_depth.
@@ -72,20 +74,13 @@ class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
     view_ = LooseOctreeView{nodes_.data(), boxes, tris_.data(), mesh.num_triangles() == 0,
                             blocks_wanted_ ? blocks_.data() : nullptr};
 
-    BuildStats s;
-    const double n = static_cast<double>(mesh.num_triangles());
-    s.nodes = shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
+    BuildStats s = tree_build_stats(shape, mesh.num_triangles());
+    // The octree's SAH is measured on the cubes; loose boxes overlap, so it is not reported.
+    s.sah_cost = std::numeric_limits<double>::quiet_NaN();
     s.bytes = nodes_.size() * sizeof(OctreeNode) + tris_.size() * sizeof(LeafTriangle) +
               blocks_.size() * sizeof(OctTriangleBlock);
     s.extra["list_blocks"] = static_cast<double>(blocks_.size());
-    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
-    s.extra["references"] = static_cast<double>(shape.references);
-    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
     s.extra["inner_references"] = static_cast<double>(shape.inner_references);
-    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
     s.extra["looseness"] = opt_.looseness;
     return s;
   }
@@ -103,15 +98,14 @@ class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
 }  // namespace
 
 AcceleratorInfo loose_octree_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "loose_octree",
       "loose octree (Ulrich 2000): node boxes grown by k, each triangle once at the deepest node containing it, "
       "children walked by entry distance",
       {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)"},
        {"leaf", "4", "a node with at most this many triangles keeps them (1..1000)"},
        {"max_depth", "20", "depth limit, root = 0 (0..20)"},
-       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"},
-       triangle_test_param()},
+       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         LooseOctreeOptions opt;
         opt.looseness = p.real("k");
@@ -124,18 +118,14 @@ AcceleratorInfo loose_octree_accelerator_info() {
           throw SpecError(fmt::format("loose_octree: max_depth must be in 0..{}", kOctMaxLevel));
         const bool simd = p.boolean("simd");
         return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), simd);
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
+      });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"loose_octree:k=1.25", "loose_octree:simd=0"};
-  info.stats = {{"inner_nodes", "inner nodes"},
-                {"references", "triangle references (= triangles: each stored once)"},
-                {"refs_per_triangle", "references per triangle (1 by construction)"},
-                {"inner_references", "triangles held by inner nodes"},
-                {"max_leaf_size", "largest node list, in triangles"},
-                {"looseness", "k in force"},
-                {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}};
+  info.stats = tree_stat_infos("triangle references (= triangles: each stored once)",
+                               "references per triangle (1 by construction)",
+                               {{"inner_references", "triangles held by inner nodes"},
+                                {"looseness", "k in force"},
+                                {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}});
   // Bench's memory estimate: about twice the final 49-50 bytes/tri on sponza and stadium (not measured at 10^7).
   info.build_peak_bytes_per_triangle = 120;
   return info;

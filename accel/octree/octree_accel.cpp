@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
+#include "accel/core/tree_stats.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/octree/build_octree.h"
 #include "accel/octree/octree_leaf_blocks.h"
@@ -23,14 +26,13 @@ template <typename Layout>
 class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
  public:
   OctreeAccel(const OctreeOptions& opt, TriangleTest test)
-      : BatchAccelerator<OctreeAccel<Layout>>(test), opt_(opt), blocks_wanted_(opt.simd && test == TriangleTest::Watertight) {}
+      : BatchAccelerator<OctreeAccel<Layout>>(test), opt_(opt), blocks_wanted_(leaf_blocks_wanted(opt.simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (view_.blocks) return traverse_octree<kTest, kAnyHit, kCount, true>(view_, ray, stats);
-    }
-    return traverse_octree<kTest, kAnyHit, kCount, false>(view_, ray, stats);
+    return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      return traverse_octree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+    });
   }
 
   // raylab show: node cubes down to max_depth (leaves drawn as leaves).
@@ -81,18 +83,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
     } else {
       // Each referenced triangle copied once, in first-use order, nodes keep
       // indices into that copy (as the k-d tree does).
-      std::vector<uint32_t> slot(mesh.num_triangles(), UINT32_MAX);
-      std::vector<uint32_t> first_use;
-      ids_.resize(tree.refs.size());
-      for (size_t i = 0; i < tree.refs.size(); ++i) {
-        const uint32_t id = tree.refs[i];
-        if (slot[id] == UINT32_MAX) {
-          slot[id] = static_cast<uint32_t>(first_use.size());
-          first_use.push_back(id);
-        }
-        ids_[i] = slot[id];
-      }
-      tris_ = copy_leaf_triangles(mesh, first_use);
+      IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.refs);
+      tris_ = std::move(leaf_tris.tris);
+      ids_ = std::move(leaf_tris.ids);
       shared_bytes = tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t);
     }
     const size_t hash_entries = std::max<size_t>(shape.nonempty_nodes, 1);
@@ -120,20 +113,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
     view_.blocks = blocks_wanted_ ? blocks_.data() : nullptr;
     view_.empty = mesh.num_triangles() == 0;
 
-    BuildStats s;
-    const double n = static_cast<double>(mesh.num_triangles());
-    s.nodes = shape.nodes;
-    s.leaves = shape.leaves;
-    s.max_depth = shape.max_depth;
-    s.avg_depth = shape.avg_leaf_depth;
-    s.sah_cost = shape.sah_cost;
+    BuildStats s = tree_build_stats(shape, mesh.num_triangles());
     s.bytes = layout_bytes + shared_bytes;
-    s.extra["inner_nodes"] = static_cast<double>(shape.inner);
-    s.extra["empty_leaves"] = static_cast<double>(shape.empty_leaves);
-    s.extra["references"] = static_cast<double>(shape.references);
-    s.extra["refs_per_triangle"] = n > 0 ? static_cast<double>(shape.references) / n : 0.0;
     s.extra["inner_references"] = static_cast<double>(shape.inner_references);
-    s.extra["max_leaf_size"] = static_cast<double>(shape.max_leaf_size);
     s.extra["nonempty_nodes"] = static_cast<double>(shape.nonempty_nodes);
     s.extra["pointer_layout_bytes"] = static_cast<double>(pointer_bytes);
     s.extra["linear_layout_bytes"] = linear_bytes;
@@ -158,7 +140,7 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
 }  // namespace
 
 AcceleratorInfo octree_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "octree",
       "regular octree over the bounding cube, exact SAT assignment, parametric traversal (Revelles et al. 2000)",
       {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
@@ -171,8 +153,7 @@ AcceleratorInfo octree_accelerator_info() {
        {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
                               "children by index arithmetic) or hash (Morton location codes, occupied nodes only)"},
        {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB"},
-       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"},
-       triangle_test_param()},
+       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         OctreeOptions opt;
         const int leaf = p.integer("leaf");
@@ -199,23 +180,18 @@ AcceleratorInfo octree_accelerator_info() {
         if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
         if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
         return std::make_unique<OctreeAccel<OctPointerLayout>>(opt, test);
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
+      });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash", "octree:simd=0",
                 "octree:term=count"};
-  info.stats = {{"inner_nodes", "inner nodes"},
-                {"empty_leaves", "leaves without triangles"},
-                {"references", "triangle references in all nodes"},
-                {"refs_per_triangle", "references per triangle (exact assignment duplicates straddling triangles)"},
-                {"inner_references", "references held by inner nodes (assign=straddle)"},
-                {"max_leaf_size", "largest leaf, in triangles"},
-                {"nonempty_nodes", "nodes with triangles in their subtree (the hashed layout's entries)"},
-                {"pointer_layout_bytes", "node memory of storage=pointer for this tree"},
-                {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
-                {"hash_layout_bytes", "node memory of storage=hash for this tree"},
-                {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}};
+  info.stats = tree_stat_infos(
+      "triangle references in all nodes", "references per triangle (exact assignment duplicates straddling triangles)",
+      {{"inner_references", "references held by inner nodes (assign=straddle)"},
+       {"nonempty_nodes", "nodes with triangles in their subtree (the hashed layout's entries)"},
+       {"pointer_layout_bytes", "node memory of storage=pointer for this tree"},
+       {"linear_layout_bytes", "node memory of storage=linear for this tree (complete tree to its depth)"},
+       {"hash_layout_bytes", "node memory of storage=hash for this tree"},
+       {"list_blocks", "SIMD triangle blocks of the node lists (0 with simd=0 or tri=mt)"}});
   // Bench's memory estimate: peak RSS growth measured 239 B/tri on soup:n=10^7 (term=count, before the
   // SIMD lists) and 266 on soup:n=10^6 with the SIMD lists and term=sah (term=count: 514).
   info.build_peak_bytes_per_triangle = 300;
