@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/irgrid/build_irgrid.h"
 #include "accel/irgrid/traverse_irgrid.h"
@@ -55,7 +56,7 @@ class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
 }  // namespace
 
 AcceleratorInfo irgrid_accelerator_info() {
-  AcceleratorInfo info{
+  AcceleratorInfo info = structure_info(
       "irgrid",
       "irregular grid (Perard-Gayot, Kalojanov & Slusallek 2017): top grid, octree-subdivided cells merged by "
       "expected cost and expanded over neighbours they contain, walked cell to cell through a voxel map",
@@ -65,8 +66,7 @@ AcceleratorInfo irgrid_accelerator_info() {
                      "cost model, in [0, 1000]"},
        {"depth", "12", "deepest octree level below a top cell, 0..16"},
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)"},
-       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)"},
-       triangle_test_param()},
+       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
@@ -80,10 +80,8 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
         return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p));
-      }};
-  info.caps.mt_variant = "tri=mt";
-  info.caps.outline = true;
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:merge=0,expand=0"};
+      });
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0"};  // both off: tests/test_irgrid.cpp
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},
                 {"refs", "triangle references in cells"},
