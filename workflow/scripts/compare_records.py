@@ -7,7 +7,9 @@ Times differ between runs; what must not: the set of cells, and every figure tha
 only on the scene, the structure and the rays. Per file kind:
   bench.json, scaling.json, sweep_*.json  cells (scene, accel, ray set, threads) and their
       triangles, rays, agreement with Embree, nodes and triangles per ray, bytes, nodes,
-      leaves, depth; the skipped cells and their reasons' structure
+      leaves, depth; the skipped cells and their reasons' structure. One exception: Embree's
+      bytes in a cell built on more than one thread agree within 10 %, not exactly (its
+      allocator hands each build thread its own blocks, so the total depends on scheduling)
   verify_*.json   every counter of every (scene, accel, ray set) (build_ms aside)
   stress.json     every (scenario, accel), its status (slow counted as ok: that one is a speed
                   ratio) and verdict; the counters when neither run subsampled (the time budget
@@ -44,12 +46,25 @@ def keyed(records, fields, what):
     return out
 
 
+def embree_multithread_bytes_agree(x, y):
+    """Embree's builder allocates per-thread blocks (its FastAllocator), so with several build
+    threads the bytes it reports vary a few per cent from run to run; the hits do not."""
+    if x.get("accel") != "embree" or (x.get("threads") or 1) <= 1:
+        return False
+    bx, by = x.get("bytes"), y.get("bytes")
+    if not isinstance(bx, (int, float)) or not isinstance(by, (int, float)) or max(bx, by) <= 0:
+        return False
+    return abs(bx - by) <= 0.10 * max(bx, by)
+
+
 def compare_keyed(a, b, what, same):
     for k in sorted(set(a) | set(b), key=str):
         if k not in a or k not in b:
             problems.append(f"{what}: cell {k} only in {'second' if k not in a else 'first'} run")
             continue
         for f in same(a[k], b[k]):
+            if f == "bytes" and embree_multithread_bytes_agree(a[k], b[k]):
+                continue
             if a[k].get(f) != b[k].get(f):
                 problems.append(f"{what}: {k}: {f} {a[k].get(f)!r} != {b[k].get(f)!r}")
 
