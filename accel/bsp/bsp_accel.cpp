@@ -96,24 +96,23 @@ AcceleratorInfo bsp_accelerator_info() {
       "bsp",
       "general BSP tree (Ize, Wald & Parker 2008): axis, 26-DOP and triangle planes, SAH on exact polytope areas, "
       "k-d fast path for axis nodes",
-      {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)"},
-       {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)"},
-       {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes"},
+      {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)",
+        integer_of({3, 7, 13})},
+       {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
+       {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
+        integer_in(2, 64).or_number(0)},
        sah_traversal_cost_param(),
        sah_intersection_cost_param(),
-       depth_limit_param()},
+       depth_limit_param(kBspMaxDepthLimit)},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
-        if (o.directions != 3 && o.directions != 7 && o.directions != 13) throw SpecError("bsp: dirs must be 3, 7 or 13");
         o.triangle_planes = p.integer("tplanes");
-        if (o.triangle_planes < 0 || o.triangle_planes > 64) throw SpecError("bsp: tplanes must be in 0..64");
         o.bins = p.integer("bins");
-        if (o.bins != 0 && (o.bins < 2 || o.bins > 64)) throw SpecError("bsp: bins must be 0 or in 2..64");
-        const SahCosts costs = parse_sah_costs(p, "bsp");
+        const SahCosts costs = parse_sah_costs(p);
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
-        o.max_depth = parse_depth_limit(p, "bsp", kBspMaxDepthLimit);
+        o.max_depth = parse_depth_limit(p);
         return std::make_unique<BspAccel>(o, parse_triangle_test(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
