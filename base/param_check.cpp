@@ -157,7 +157,16 @@ ParamCheck one_of(std::vector<std::string> choices) {
 
 std::string invalid_param_message(const std::string& owner, const std::string& key, const ParamCheck& check,
                                   const std::string& value) {
-  return fmt::format("{}: {} must be {}, got {}", owner, key, check.describe(), value);
+  // The one message shape; a value that is no number at all says so
+  // ("..., got abc (not an integer)").
+  std::string why;
+  double v = 0;
+  bool is_word = false;
+  for (const auto& w : check.words) is_word |= value == w;
+  if ((check.kind == ParamKind::Integer || check.kind == ParamKind::Real) && !is_word &&
+      !parse_number(value, check.kind, false, v))
+    why = check.kind == ParamKind::Integer ? " (not an integer)" : " (not a finite number)";
+  return fmt::format("{}: {} must be {}, got {}{}", owner, key, check.describe(), value, why);
 }
 
 }  // namespace raylab

@@ -101,6 +101,12 @@ TEST(ParamCheck, AcceptsExactlyTheDeclaredValues) {
   } catch (const SpecError& e) {
     EXPECT_STREQ(e.what(), "kdtree: max_depth must be auto or in 0..64, got 65");
   }
+  try {
+    make_accelerator("bvh:bins=x");
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_STREQ(e.what(), "bvh: bins must be in 2..256, got x (not an integer)");
+  }
   EXPECT_THROW(load_scene("terrain:roughness=1"), SpecError);  // scenes declare theirs the same way
 }
 
