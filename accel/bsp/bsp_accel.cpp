@@ -33,6 +33,10 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
     BspBuildStats bs;
+    for (int k = 0; k < 13; ++k) {
+      const Vec3f& u = bsp_fixed_directions()[k];
+      directions_.x[k] = u.x(), directions_.y[k] = u.y(), directions_.z[k] = u.z();
+    }
     BspTree tree = build_bsp(mesh, opt_, &bs);
     BspPackedTree packed = pack_bsp_nodes(tree.nodes);
     tree.nodes = {};
@@ -52,7 +56,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
       ids_ = std::move(leaf_tris.ids);
     }
     view_ = BspView{nodes_.data(), planes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                    bsp_fixed_directions(), opt_.directions, blocks_.empty() ? nullptr : blocks_.data()};
+                    &directions_, blocks_.empty() ? nullptr : blocks_.data()};
 
     const TreeShape shape{.nodes = nodes_.size(),
                           .inner = nodes_.size() - bs.leaves,
@@ -66,7 +70,6 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
     BuildStats s = tree_build_stats(shape, mesh.num_triangles());
     s.bytes = nodes_.size() * sizeof(BspPackedNode) + planes_.size() * sizeof(BspPlane) +
               tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t) + blocks_.size() * sizeof(KdTriangleBlock);
-    s.extra["leaf_blocks"] = static_cast<double>(blocks_.size());
     s.extra["axis_nodes"] = static_cast<double>(bs.axis_nodes);
     s.extra["kdop_nodes"] = static_cast<double>(bs.kdop_nodes);
     s.extra["triangle_plane_nodes"] = static_cast<double>(bs.triangle_plane_nodes);
@@ -107,6 +110,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
            outline_node(node.child() + 1, above, depth + 1, max_depth, out);
   }
 
+  BspDirectionTable directions_;
   std::vector<BspPackedNode> nodes_;
   std::vector<BspPlane> planes_;
   std::vector<LeafTriangle> tris_;
