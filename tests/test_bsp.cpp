@@ -205,10 +205,7 @@ TEST(Bsp, NoPlaneRepeatsOnAPathAndDiagonalNodesNameTheirDirection) {
     todo.push_back({node.index, it.path});
     todo.push_back({node.index + 1, it.path});
   }
-  const auto rays = test::rays_at_triangles(mesh, 300, 2);
-  auto acc = make_accelerator("bsp");
-  acc->build(mesh);
-  EXPECT_EQ(test::count_brute_mismatches(*acc, mesh, rays), 0u);
+  EXPECT_EQ(test::mismatches_vs_brute("bsp", mesh, test::rays_at_triangles(mesh, 300, 2)), 0u);
 }
 
 // The traced tree is the builder's repacked into 8-byte nodes: every node
