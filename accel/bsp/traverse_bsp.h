@@ -165,21 +165,11 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
       }
       const float t_near_end = (rel + margin) * inv;
       const float t_far_start = (rel - margin) * inv;
-      const uint32_t near = n.child() + neg;
-      const uint32_t far = n.child() + 1u - neg;
-      node = stack.descend(near, far, t_near_end, t_far_start, t0, t1);
+      node = stack.descend_pair(n.child(), neg, t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
-    rec.count_nodes(1);
-    bool kept;
-    if constexpr (kBlocks)
-      kept = intersect_block_leaf<kKdBlockWidth>(tree.blocks + n.first(), kd_leaf_blocks(n.count()), pre, ray.tmin, rec);
-    else
-      kept = intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.first(), n.count(), rec);
-    if constexpr (kAnyHit) {
-      if (kept) return rec.hit();
-    }
-    if (!stack.pop_within(rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
+    const bool kept = intersect_kd_leaf<kBlocks>(tree, n.first(), n.count(), pre, ray, rec);
+    if (!stack.template next_after_leaf<kAnyHit>(kept, rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
   }
 }
 

@@ -30,6 +30,25 @@ class IntervalStack {
     return visit_near ? near : far;
   }
 
+  // descend() for the trees that store two children side by side, below the
+  // plane at first_child and above it at first_child + 1: a ray going down
+  // (neg = 1, its direction's sign bit, -0 included) meets the upper one first.
+  [[gnu::always_inline]] uint32_t descend_pair(uint32_t first_child, uint32_t neg, float t_near_end,
+                                               float t_far_start, float t0, float& t1) {
+    return descend(first_child + neg, first_child + 1u - neg, t_near_end, t_far_start, t0, t1);
+  }
+
+  // After a leaf: false when the walk is over, because an any-hit walk kept a
+  // hit there (`kept`) or no pushed cell can still hold a closer one;
+  // otherwise the next cell and its interval, as pop_within().
+  template <bool kAnyHit>
+  [[gnu::always_inline]] bool next_after_leaf(bool kept, float t_bound, uint32_t& node, float& t0, float& t1) {
+    if constexpr (kAnyHit) {
+      if (kept) return false;
+    }
+    return pop_within(t_bound, node, t0, t1);
+  }
+
   // The next cell that can still hold a closer hit: cells starting beyond
   // t_bound (the closest hit so far plus the test's distance error) are
   // dropped. False when the stack runs empty.

@@ -119,6 +119,21 @@ struct KdRay {
 
 // kBlocks: leaves are SIMD triangle blocks (watertight test only); else
 // indices into the scalar triangle copies.
+// One leaf of a k-d style tree (this one, and the BSP tree, which stores the
+// same leaves): a node visited under the shared definition, then its
+// triangles as 4-wide SIMD blocks when the tree keeps them (the watertight
+// test), else one by one through the id list. True when a hit was kept, so
+// an any-hit walk can stop.
+template <bool kBlocks, class Tree, class LeafRay, class Recorder>
+[[gnu::always_inline]] inline bool intersect_kd_leaf(const Tree& tree, uint32_t first, uint32_t count,
+                                                     const LeafRay& pre, const Ray& ray, Recorder& rec) {
+  rec.count_nodes(1);
+  if constexpr (kBlocks)
+    return intersect_block_leaf<kKdBlockWidth>(tree.blocks + first, kd_leaf_blocks(count), pre, ray.tmin, rec);
+  else
+    return intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + first, count, rec);
+}
+
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
 inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
@@ -148,26 +163,14 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       // Where the ray leaves the (inflated) near child and enters the far one.
       const float t_near_end = (rel + margin[k]) * inv[k];
       const float t_far_start = (rel - margin[k]) * inv[k];
-      // Below child = child(), above = child() + 1; a ray going down (sign
-      // bit set, -0 included) is above the plane first.
-      const uint32_t near = n.child() + neg[k];
-      const uint32_t far = n.child() + 1u - neg[k];
-      node = stack.descend(near, far, t_near_end, t_far_start, t0, t1);
+      // Below child = child(), above = child() + 1.
+      node = stack.descend_pair(n.child(), neg[k], t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
 
-    rec.count_nodes(1);
-    bool kept;
-    if constexpr (kBlocks)
-      kept = intersect_block_leaf<kKdBlockWidth>(tree.blocks + n.offset(), kd_leaf_blocks(n.count()), pre, ray.tmin, rec);
-    else
-      kept = intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + n.offset(), n.count(), rec);
-    if constexpr (kAnyHit) {
-      if (kept) return rec.hit();
-    }
-
+    const bool kept = intersect_kd_leaf<kBlocks>(tree, n.offset(), n.count(), pre, ray, rec);
     // Next cell that can still hold a closer hit (plus the test's distance error).
-    if (!stack.pop_within(rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
+    if (!stack.template next_after_leaf<kAnyHit>(kept, rec.tmax() + delta_t, node, t0, t1)) return rec.hit();
   }
 }
 
