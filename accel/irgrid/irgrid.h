@@ -14,18 +14,29 @@
 // entries (child = the next k bits of x, y, z, most significant first). Merging rewrites the entries of the
 // merged cells; expansion only grows a cell's own box (`lo`/`hi`), so boxes
 // may overlap their neighbours while the map still names each voxel's owner.
+//
+// A cell's triangles are either ids into `refs` (scalar test, either
+// triangle test) or, with leaf blocks (simd=1, tri=watertight), the k-d
+// tree's 4-wide SIMD triangle blocks: the walk then goes voxel map -> cell
+// -> block, one dependent load fewer than map -> cell -> id -> triangle, and
+// the block test gives the scalar test's hits bit for bit (triangle_block.h).
 #include <cstdint>
 #include <vector>
 
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda_grid.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
+// Everything one step of the walk reads, in one 32-byte record.
 struct IrgridCell {
   int32_t lo[3], hi[3];  // virtual voxels [lo, hi), the expanded box
-  uint32_t begin = 0, count = 0;  // triangles refs[begin, begin + count)
+  // count triangles: refs[begin, begin + count), or with leaf blocks the
+  // kd_leaf_blocks(count) blocks from blocks[begin].
+  uint32_t begin = 0, count = 0;
 };
+static_assert(sizeof(IrgridCell) == 32);
 
 inline constexpr uint32_t kIrgridInnerNode = 0x80000000u;
 inline constexpr int kIrgridLevelsShift = 29;  // bits 29-30 of an inner entry: k
@@ -39,8 +50,10 @@ struct Irgrid {
   std::vector<uint32_t> top_nodes;  // per top cell: its root entry
   std::vector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
   std::vector<IrgridCell> cells;
-  std::vector<uint32_t> refs;
-  std::vector<LeafTriangle> tris;
+  std::vector<uint32_t> refs;       // empty with leaf blocks
+  std::vector<LeafTriangle> tris;   // empty with leaf blocks
+  std::vector<KdTriangleBlock> blocks;
+  bool leaf_blocks = false;  // cells name blocks, not refs
   bool empty = true;
 
   // The deepest block a walk's last lookup went through. The next voxel of
@@ -85,7 +98,8 @@ struct Irgrid {
 
   size_t bytes() const {
     return top_nodes.size() * sizeof(uint32_t) + nodes.size() * sizeof(uint32_t) +
-           cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle);
+           cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle) +
+           blocks.size() * sizeof(KdTriangleBlock);
   }
 };
 

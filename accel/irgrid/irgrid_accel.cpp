@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/irgrid/build_irgrid.h"
@@ -15,11 +16,16 @@ namespace {
 
 class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
  public:
-  IrgridAccel(const IrgridOptions& opt, TriangleTest test) : BatchAccelerator(test), opt_(opt) {}
+  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd) : BatchAccelerator(test), opt_(opt) {
+    opt_.leaf_blocks = leaf_blocks_wanted(simd, test);
+  }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_irgrid<kTest, kAnyHit, kCount>(grid_, ray, stats);
+    if constexpr (kTest == TriangleTest::Watertight) {
+      if (grid_.leaf_blocks) return traverse_irgrid<kTest, kAnyHit, kCount, true>(grid_, ray, stats);
+    }
+    return traverse_irgrid<kTest, kAnyHit, kCount, false>(grid_, ray, stats);
   }
 
   // Depth 0: the grid's box; depth 1: every cell's (expanded) box, filled
@@ -66,7 +72,8 @@ AcceleratorInfo irgrid_accelerator_info() {
                      "cost model, in [0, 1000]"},
        {"depth", "12", "deepest octree level below a top cell, 0..16"},
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)"},
-       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)"}},
+       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)"},
+       {"simd", "1", "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)"}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
@@ -79,9 +86,10 @@ AcceleratorInfo irgrid_accelerator_info() {
         if (opt.max_depth < 0 || opt.max_depth > 16) throw SpecError("irgrid: depth must be in 0..16");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
-        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p));
+        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), p.boolean("simd"));
       });
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0"};  // both off: tests/test_irgrid.cpp
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0"};  // both off: tests/test_irgrid.cpp
+  info.caps.scalar_variant = "simd=0";
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},
                 {"refs", "triangle references in cells"},

@@ -21,16 +21,23 @@
 // grid_ray_query.h). Expansion keeps this: a cell's box only grows over
 // voxels whose owners' triangles the cell lists (or that are empty), so all
 // triangles within the assignment margin of the walked path were tested.
+//
+// kBlocks (leaf blocks, irgrid.h): a cell's triangles are tested 4 at a time
+// by the SIMD watertight test, without the mailbox (a block mixes tested and
+// untested triangles; testing one again on [tmin, tmax] cannot change the
+// recorder's hit, as it gives the same t and id), so the hits are the same.
 #include <cstdint>
 #include <limits>
 
+#include "accel/bvh/triangle_block.h"
 #include "accel/grid/grid_ray_query.h"
 #include "accel/irgrid/irgrid.h"
 
 namespace raylab {
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
 inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stats) {
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
   return walk_grid<kTest, kAnyHit, kCount>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1,
                                                                            auto& q) {
     int32_t v[3];
@@ -38,6 +45,9 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
+    const KdTriangleBlock* blocks = g.blocks.data();
+    BlockRay<kKdBlockWidth> block_ray;
+    if constexpr (kBlocks) block_ray.init(q.pre.w);
     Irgrid::LookupCache cache;
     while (true) {
       const IrgridCell& c = cells[g.cell_at(v, cache)];
@@ -52,7 +62,14 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
           exit_axis = a;
         }
       }
-      if (c.count != 0 && q.test_cell(refs + c.begin, c.count, tris)) return;  // any hit: found one
+      if constexpr (kBlocks) {
+        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(blocks + c.begin, kd_leaf_blocks(c.count), block_ray,
+                                                                 q.ray.tmin, q.rec)) {
+          if constexpr (kAnyHit) return;  // found one
+        }
+      } else {
+        if (c.count != 0 && q.test_cell(refs + c.begin, c.count, tris)) return;  // any hit: found one
+      }
       if constexpr (!kAnyHit) {
         if (q.done_at(t_exit)) return;
       }
