@@ -49,8 +49,15 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     BlockRay<kKdBlockWidth> block_ray;
     if constexpr (kBlocks) block_ray.init(q.pre.w);
     Irgrid::LookupCache cache;
+    // Software pipelining: the walk is a chain of dependent loads (voxel
+    // map -> cell -> triangles), so each step first finds the *next* cell
+    // (it depends only on the current cell's box, not on its triangles) and
+    // only then tests the current cell's triangles: the next lookup's loads
+    // overlap the triangle tests instead of waiting behind them.
+    uint32_t cur = g.cell_at(v, cache);
     while (true) {
-      const IrgridCell& c = cells[g.cell_at(v, cache)];
+      const IrgridCell& c = cells[cur];
+      if constexpr (kBlocks) __builtin_prefetch(blocks + c.begin);
       q.rec.count_nodes(1);
       double t_exit = std::numeric_limits<double>::infinity();
       int exit_axis = -1;
@@ -60,6 +67,23 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
         if (t < t_exit) {
           t_exit = t;
           exit_axis = a;
+        }
+      }
+      // The next voxel, then its cell (none past the ray's end or the grid).
+      bool last = !(t_exit < t1);
+      uint32_t next = 0;
+      if (!last) {
+        for (int a = 0; a < 3; ++a) {
+          if (a == exit_axis || dr.step[a] == 0) continue;
+          const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
+          if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
+          else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
+        }
+        v[exit_axis] = dr.step[exit_axis] > 0 ? c.hi[exit_axis] : c.lo[exit_axis] - 1;
+        last = static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis]);
+        if (!last) {
+          next = g.cell_at(v, cache);
+          __builtin_prefetch(cells + next);
         }
       }
       if constexpr (kBlocks) {
@@ -73,15 +97,8 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
       if constexpr (!kAnyHit) {
         if (q.done_at(t_exit)) return;
       }
-      if (!(t_exit < t1)) return;
-      for (int a = 0; a < 3; ++a) {
-        if (a == exit_axis || dr.step[a] == 0) continue;
-        const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
-        if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
-        else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
-      }
-      v[exit_axis] = dr.step[exit_axis] > 0 ? c.hi[exit_axis] : c.lo[exit_axis] - 1;
-      if (static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis])) return;
+      if (last) return;
+      cur = next;
     }
   });
 }
