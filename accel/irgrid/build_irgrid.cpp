@@ -456,21 +456,33 @@ void IrgridBuilder::finish(BuildStats& stats) {
   add_occupancy_stats(stats, g_.cells.size(), nonempty, refs, max_per_cell, g_.tris.size());
 }
 
-// Leaf blocks (irgrid.h): each cell's list as kd_leaf_blocks(count) 4-wide
-// blocks, cells in order; they replace the ids and the triangle copies.
+// Leaf blocks (irgrid.h): each cell's record followed by its list as
+// kd_leaf_blocks(count) 4-wide blocks, cells in order, and the voxel map's
+// leaf entries rewritten from cell ids to record positions. The slabs
+// replace the cells, the ids and the triangle copies.
 void IrgridBuilder::make_leaf_blocks(const TriangleMesh& mesh) {
-  std::vector<uint32_t> first(g_.cells.size() + 1, 0);
-  for (size_t i = 0; i < g_.cells.size(); ++i) first[i + 1] = first[i] + kd_leaf_blocks(g_.cells[i].count);
-  g_.blocks.resize(first.back());
+  std::vector<uint64_t> at(g_.cells.size() + 1, 0);
+  for (size_t i = 0; i < g_.cells.size(); ++i) at[i + 1] = at[i] + Irgrid::slab_chunks(g_.cells[i].count);
+  if (at.back() >= kIrgridInnerNode) throw std::length_error("irgrid: more than 2^31 chunks of leaf blocks");
+  g_.slabs.resize(at.back());
   tbb::parallel_for(size_t{0}, g_.cells.size(), [&](size_t i) {
-    IrgridCell& c = g_.cells[i];
+    IrgridCell c = g_.cells[i];
     const uint32_t* ids = g_.refs.data() + c.begin;
-    for (uint32_t k = 0; k < c.count; k += kKdBlockWidth)
-      fill_block<kKdBlockWidth>(g_.blocks[first[i] + k / kKdBlockWidth], ids + k,
-                                static_cast<int>(std::min<uint32_t>(c.count - k, kKdBlockWidth)),
+    IrgridChunk* slab = g_.slabs.data() + at[i];
+    c.begin = static_cast<uint32_t>(at[i] + 1);
+    new (slab) IrgridCell(c);
+    for (uint32_t k = 0; k < c.count; k += kKdBlockWidth) {
+      auto* blk = new (slab + 1 + (k / kKdBlockWidth) * kIrgridChunksPerBlock) KdTriangleBlock;
+      fill_block<kKdBlockWidth>(*blk, ids + k, static_cast<int>(std::min<uint32_t>(c.count - k, kKdBlockWidth)),
                                 [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
-    c.begin = first[i];
+    }
   });
+  auto to_slab = [&](uint32_t& e) {
+    if (!(e & kIrgridInnerNode)) e = static_cast<uint32_t>(at[e]);
+  };
+  for (uint32_t& e : g_.top_nodes) to_slab(e);
+  for (uint32_t& e : g_.nodes) to_slab(e);
+  std::vector<IrgridCell>().swap(g_.cells);
   std::vector<uint32_t>().swap(g_.refs);
   std::vector<LeafTriangle>().swap(g_.tris);
   g_.leaf_blocks = true;

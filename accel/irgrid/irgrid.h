@@ -17,10 +17,16 @@
 //
 // A cell's triangles are either ids into `refs` (scalar test, either
 // triangle test) or, with leaf blocks (simd=1, tri=watertight), the k-d
-// tree's 4-wide SIMD triangle blocks: the walk then goes voxel map -> cell
-// -> block, one dependent load fewer than map -> cell -> id -> triangle, and
-// the block test gives the scalar test's hits bit for bit (triangle_block.h).
+// tree's 4-wide SIMD triangle blocks, stored with the cell: `slabs` holds
+// per cell its 32-byte record followed by its blocks, and the voxel map's
+// leaf entries name the record's position there. The walk then goes voxel
+// map -> cell record and blocks in consecutive cache lines (one stream the
+// walk can prefetch as soon as it knows the next cell), instead of map ->
+// cell -> id -> triangle; the block test gives the scalar test's hits bit
+// for bit (triangle_block.h).
+#include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "accel/core/leaf_triangle.h"
@@ -38,6 +44,14 @@ struct IrgridCell {
 };
 static_assert(sizeof(IrgridCell) == 32);
 
+// The unit of `slabs`: a cell record or a fifth of a 4-wide block.
+struct alignas(32) IrgridChunk {
+  std::byte bytes[32];
+};
+inline constexpr uint32_t kIrgridChunksPerBlock = sizeof(KdTriangleBlock) / sizeof(IrgridChunk);
+static_assert(sizeof(KdTriangleBlock) % sizeof(IrgridChunk) == 0 && alignof(KdTriangleBlock) <= alignof(IrgridChunk));
+static_assert(sizeof(IrgridCell) == sizeof(IrgridChunk));
+
 inline constexpr uint32_t kIrgridInnerNode = 0x80000000u;
 inline constexpr int kIrgridLevelsShift = 29;  // bits 29-30 of an inner entry: k
 inline constexpr uint32_t kIrgridBlockMask = (1u << kIrgridLevelsShift) - 1;
@@ -49,12 +63,35 @@ struct Irgrid {
   int depth = 0;    // log2 of the refinement: the deepest octree level allowed
   std::vector<uint32_t> top_nodes;  // per top cell: its root entry
   std::vector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
-  std::vector<IrgridCell> cells;
+  std::vector<IrgridCell> cells;    // empty with leaf blocks
   std::vector<uint32_t> refs;       // empty with leaf blocks
   std::vector<LeafTriangle> tris;   // empty with leaf blocks
-  std::vector<KdTriangleBlock> blocks;
-  bool leaf_blocks = false;  // cells name blocks, not refs
+  // With leaf blocks: per cell its record, then kd_leaf_blocks(count) blocks;
+  // the voxel map's leaf entries are record positions (in chunks).
+  std::vector<IrgridChunk> slabs;
+  bool leaf_blocks = false;
   bool empty = true;
+
+  // The cell record and the blocks at slab position `at` (objects the
+  // builder created there with placement new).
+  const IrgridCell& slab_cell(uint32_t at) const {
+    return *std::launder(reinterpret_cast<const IrgridCell*>(slabs.data() + at));
+  }
+  const KdTriangleBlock* slab_blocks(uint32_t at) const {
+    return std::launder(reinterpret_cast<const KdTriangleBlock*>(slabs.data() + at + 1));
+  }
+  static uint32_t slab_chunks(uint32_t count) { return 1 + kd_leaf_blocks(count) * kIrgridChunksPerBlock; }
+
+  // Every cell in order (either layout).
+  template <typename F>
+  void for_each_cell(F&& f) const {
+    if (!leaf_blocks) {
+      for (const IrgridCell& c : cells) f(c);
+      return;
+    }
+    for (size_t at = 0; at < slabs.size(); at += slab_chunks(slab_cell(static_cast<uint32_t>(at)).count))
+      f(slab_cell(static_cast<uint32_t>(at)));
+  }
 
   // The deepest block a walk's last lookup went through. The next voxel of
   // a walk is a neighbour of the last, usually under the same block, so the
@@ -99,7 +136,7 @@ struct Irgrid {
   size_t bytes() const {
     return top_nodes.size() * sizeof(uint32_t) + nodes.size() * sizeof(uint32_t) +
            cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle) +
-           blocks.size() * sizeof(KdTriangleBlock);
+           slabs.size() * sizeof(IrgridChunk);
   }
 };
 

@@ -34,8 +34,10 @@ class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
     out.what = "cells (expanded boxes), occupied ones filled";
     if (grid_.empty) return;
     if (!out.add(OutlineBox{voxel_box(grid_.virt, 0, grid_.virt.res), 0, false}) || max_depth < 1) return;
-    for (const IrgridCell& c : grid_.cells)
-      if (!out.add(OutlineBox{voxel_box(grid_.virt, c.lo, c.hi), 1, c.count != 0})) return;
+    bool room = true;
+    grid_.for_each_cell([&](const IrgridCell& c) {
+      room = room && out.add(OutlineBox{voxel_box(grid_.virt, c.lo, c.hi), 1, c.count != 0});
+    });
   }
 
  protected:

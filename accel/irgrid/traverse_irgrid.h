@@ -22,10 +22,13 @@
 // voxels whose owners' triangles the cell lists (or that are empty), so all
 // triangles within the assignment margin of the walked path were tested.
 //
-// kBlocks (leaf blocks, irgrid.h): a cell's triangles are tested 4 at a time
-// by the SIMD watertight test, without the mailbox (a block mixes tested and
-// untested triangles; testing one again on [tmin, tmax] cannot change the
-// recorder's hit, as it gives the same t and id), so the hits are the same.
+// Triangle tests: every triangle of a visited cell, without a mailbox: a
+// triangle met again in a later cell is tested again, which cannot change
+// the recorder's hit (the same t and id; ties go to the lower id). With leaf
+// blocks (kBlocks, irgrid.h) `cur` is a cell's slab position and its
+// triangles are tested 4 at a time by the SIMD watertight test; simd=0 runs
+// the same walk with the scalar test, so both give the same hits and count
+// the same work (a mailbox cannot skip single lanes of a block).
 #include <cstdint>
 #include <limits>
 
@@ -45,7 +48,6 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
-    const KdTriangleBlock* blocks = g.blocks.data();
     BlockRay<kKdBlockWidth> block_ray;
     if constexpr (kBlocks) block_ray.init(q.pre.w);
     Irgrid::LookupCache cache;
@@ -56,8 +58,8 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     // overlap the triangle tests instead of waiting behind them.
     uint32_t cur = g.cell_at(v, cache);
     while (true) {
-      const IrgridCell& c = cells[cur];
-      if constexpr (kBlocks) __builtin_prefetch(blocks + c.begin);
+      // With blocks, `cur` is the cell's slab position (irgrid.h).
+      const IrgridCell& c = kBlocks ? g.slab_cell(cur) : cells[cur];
       q.rec.count_nodes(1);
       double t_exit = std::numeric_limits<double>::infinity();
       int exit_axis = -1;
@@ -83,16 +85,27 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
         last = static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis]);
         if (!last) {
           next = g.cell_at(v, cache);
-          __builtin_prefetch(cells + next);
+          if constexpr (kBlocks) {
+            // The record and the first block: 192 bytes from a 32-byte boundary.
+            const char* p = reinterpret_cast<const char*>(g.slabs.data() + next);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + 64);
+            __builtin_prefetch(p + 128);
+            __builtin_prefetch(p + 191);
+          } else {
+            __builtin_prefetch(cells + next);
+          }
         }
       }
       if constexpr (kBlocks) {
-        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(blocks + c.begin, kd_leaf_blocks(c.count), block_ray,
+        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(g.slab_blocks(cur), kd_leaf_blocks(c.count), block_ray,
                                                                  q.ray.tmin, q.rec)) {
           if constexpr (kAnyHit) return;  // found one
         }
       } else {
-        if (c.count != 0 && q.test_cell(refs + c.begin, c.count, tris)) return;  // any hit: found one
+        if (c.count != 0 && intersect_leaf_indexed(q.pre, q.ray, tris, refs + c.begin, c.count, q.rec)) {
+          if constexpr (kAnyHit) return;  // found one
+        }
       }
       if constexpr (!kAnyHit) {
         if (q.done_at(t_exit)) return;
