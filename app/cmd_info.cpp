@@ -87,6 +87,27 @@ Runner add_scenes(CLI::App& app) {
   };
 }
 
+// A declared parameter: name, default, help, and its valid values as the
+// spec parser checks them (kind; `valid` in words; choices or numeric range).
+static nlohmann::json param_json(const ParamInfo& p) {
+  static const char* const kinds[] = {"text", "integer", "real", "boolean", "choice"};
+  const ParamCheck& c = p.check;
+  nlohmann::json j = {{"name", p.name}, {"default", p.default_value}, {"help", p.help},
+                      {"kind", kinds[static_cast<int>(c.kind)]}, {"valid", c.describe()}};
+  if (c.kind == ParamKind::Choice) j["choices"] = c.words;
+  if (c.kind == ParamKind::Integer || c.kind == ParamKind::Real) {
+    const auto bound = [](double x) { return std::isinf(x) ? nlohmann::json(nullptr) : nlohmann::json(x); };
+    const bool real = c.kind == ParamKind::Real;
+    if (c.has_range)
+      j["range"] = {{"min", bound(c.lo)}, {"max", bound(c.hi)},
+                    {"min_open", real && (c.ends == Ends::OpenLow || c.ends == Ends::Open)},
+                    {"max_open", real && (c.ends == Ends::OpenHigh || c.ends == Ends::Open)}};
+    if (!c.numbers.empty()) j["also_numbers"] = c.numbers;
+    if (!c.words.empty()) j["also_words"] = c.words;
+  }
+  return j;
+}
+
 // The registry as JSON, for scripts (scripts/*.sh, bench/plot.py): they ask
 // the binary instead of keeping their own lists of structures.
 static nlohmann::json accelerators_json() {
@@ -101,7 +122,7 @@ static nlohmann::json accelerators_json() {
       for (const auto& [key, value] : info.describe()) j["description"][key] = value;
     }
     j["params"] = nlohmann::json::array();
-    for (const auto& p : info.params) j["params"].push_back({{"name", p.name}, {"default", p.default_value}, {"help", p.help}});
+    for (const auto& p : info.params) j["params"].push_back(param_json(p));
     j["stats"] = nlohmann::json::array();
     for (const auto& st : info.stats) j["stats"].push_back({{"key", st.key}, {"help", st.help}});
     j["cover"] = info.cover;

@@ -81,6 +81,10 @@ Params::Params(std::string owner, const std::vector<ParamInfo>& declared,
     }
     values_[k] = v;
   }
+  for (const auto& p : declared) {
+    const std::string& v = values_[p.name];
+    if (!p.check.accepts(v)) throw SpecError(invalid_param_message(owner_, p.name, p.check, v));
+  }
 }
 
 const std::string& Params::str(const std::string& key) const {
@@ -112,15 +116,6 @@ bool Params::boolean(const std::string& key) const {
   if (s == "1" || s == "true" || s == "on" || s == "yes") return true;
   if (s == "0" || s == "false" || s == "off" || s == "no") return false;
   throw SpecError(fmt::format("parameter {}={} of '{}' is not a boolean (use 0 or 1)", key, s, owner_));
-}
-
-const std::string& Params::choice(const std::string& key, const std::vector<std::string>& choices) const {
-  const std::string& s = str(key);
-  for (const auto& c : choices)
-    if (c == s) return s;
-  std::string list;
-  for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
-  throw SpecError(fmt::format("parameter {}={} of '{}' must be one of: {}", key, s, owner_, list));
 }
 
 std::vector<std::string> split_at(const std::string& text, char sep) {

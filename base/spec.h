@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "base/param_check.h"
+
 namespace raylab {
 
 class SpecError : public std::runtime_error {
@@ -30,15 +32,18 @@ std::vector<std::string> split_spec_list(const std::string& text);
 // "a", "", "b"; "" -> one empty piece).
 std::vector<std::string> split_at(const std::string& text, char sep);
 
-// Declared parameter of a spec: name, default value and a one-line help.
+// Declared parameter of a spec: name, default value, a one-line help and the
+// values it accepts (checked by Params, so factories only read).
 struct ParamInfo {
   std::string name;
   std::string default_value;
   std::string help;
+  ParamCheck check{};
 };
 
 // Typed access to a spec's parameters after they were checked against the
-// declared list; undeclared keys are rejected before construction.
+// declared list: undeclared keys and values outside their declaration
+// (ParamInfo::check) are rejected on construction.
 class Params {
  public:
   Params(std::string owner, const std::vector<ParamInfo>& declared,
@@ -48,8 +53,6 @@ class Params {
   int integer(const std::string& key) const;
   double real(const std::string& key) const;
   bool boolean(const std::string& key) const;
-  // One of `choices`; throws SpecError listing them otherwise.
-  const std::string& choice(const std::string& key, const std::vector<std::string>& choices) const;
 
   bool given(const std::string& key) const { return given_.count(key) != 0; }
 

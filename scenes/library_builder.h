@@ -100,4 +100,12 @@ inline View look_at(const Vec3f& at, const Vec3f& dir, float dist, float fov_deg
   return v;
 }
 
+// The library's last step: the scene with its default camera, under a
+// uniform white sky.
+inline Scene with_view(Scene s, const View& view) {
+  s.view = view;
+  s.background = Vec3f::Constant(1.0f);
+  return s;
+}
+
 }  // namespace raylab::library

@@ -14,16 +14,13 @@ using namespace library;
 
 SceneGenerator city_generator() {
   return {"city", "n x n blocks of buildings (log-normal heights), roof units and cars: boxes of very different sizes",
-          {{"n", "16", "blocks per side"},
+          {{"n", "16", "blocks per side", integer_in(1, 1024)},
            seed_param(),
-           {"cars", "12", "cars per block"},
-           {"tall", "1", "height scale of the buildings"}},
+           {"cars", "12", "cars per block", integer_in(0, 1000)},
+           {"tall", "1", "height scale of the buildings", real_in(0, 100, Ends::OpenLow)}},
           [](const Params& p) {
             const int n = p.integer("n"), cars = p.integer("cars");
             const double tall = p.real("tall");
-            if (n < 1 || n > 1024) throw SpecError("city: n must be in 1..1024");
-            if (cars < 0 || cars > 1000) throw SpecError("city: cars must be in 0..1000");
-            if (!(tall > 0.0 && tall <= 100.0)) throw SpecError("city: tall must be in (0, 100]");
             Random rng(static_cast<uint64_t>(p.integer("seed")));
             Scene s;
             const uint32_t asphalt = add_material(s, Vec3f(0.18f, 0.18f, 0.19f));
@@ -73,9 +70,8 @@ SceneGenerator city_generator() {
                 }
               }
             const float span = 2.0f * half;
-            s.view = look_at(Vec3f(0.0f, 0.1f * span, 0.0f), Vec3f(0.8f, 0.62f, 1.0f), 1.05f * span, 45.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s),
+                             look_at(Vec3f(0.0f, 0.1f * span, 0.0f), Vec3f(0.8f, 0.62f, 1.0f), 1.05f * span, 45.0f));
           }};
 }
 

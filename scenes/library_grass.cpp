@@ -13,18 +13,14 @@ using namespace library;
 
 SceneGenerator grass_generator() {
   return {"grass", "thin curved grass blades on a 2x2 patch: n (2 segments - 1) + 2 triangles",
-          {{"n", "30000", "number of blades"},
+          {{"n", "30000", "number of blades", integer_in(0, 2e7)},
            seed_param(),
-           {"segments", "4", "segments per blade (triangles per blade: 2 segments - 1)"},
-           {"height", "0.12", "mean blade height (the patch is 2 wide)"},
-           {"width", "0.006", "blade width at the root"}},
+           {"segments", "4", "segments per blade (triangles per blade: 2 segments - 1)", integer_in(1, 64)},
+           {"height", "0.12", "mean blade height (the patch is 2 wide)", real_in(0, 10, Ends::OpenLow)},
+           {"width", "0.006", "blade width at the root", real_in(0, 1, Ends::OpenLow)}},
           [](const Params& p) {
             const int n = p.integer("n"), segments = p.integer("segments");
             const double height = p.real("height"), width = p.real("width");
-            if (n < 0 || n > 20'000'000) throw SpecError("grass: n must be in 0..2e7");
-            if (segments < 1 || segments > 64) throw SpecError("grass: segments must be in 1..64");
-            if (!(height > 0.0 && height <= 10.0)) throw SpecError("grass: height must be in (0, 10]");
-            if (!(width > 0.0 && width <= 1.0)) throw SpecError("grass: width must be in (0, 1]");
             if (static_cast<double>(n) * (2 * segments - 1) > 1e8) throw SpecError("grass: more than 1e8 triangles");
             Random rng(static_cast<uint64_t>(p.integer("seed")));
             Scene s;
@@ -67,9 +63,7 @@ SceneGenerator grass_generator() {
               }
             }
             add_ground(s, Vec3f::Zero(), 1.0f, soil);
-            s.view = look_at(Vec3f(0.0f, 0.02f, 0.35f), Vec3f(0.35f, 0.35f, 1.0f), 1.25f, 40.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s), look_at(Vec3f(0.0f, 0.02f, 0.35f), Vec3f(0.35f, 0.35f, 1.0f), 1.25f, 40.0f));
           }};
 }
 

@@ -10,18 +10,16 @@ SceneGenerator box_generator() {
           [](const Params&) {
             Scene s;
             library::add_box(s, Vec3f::Constant(-0.5f), Vec3f::Constant(0.5f), library::add_material(s, Vec3f::Constant(0.7f)));
-            s.view = frame_bounds(s.bounds());
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            const View view = frame_bounds(s.bounds());
+            return library::with_view(std::move(s), view);
           }};
 }
 
 SceneGenerator plane_generator() {
   return {"plane", "square [-1, 1]^2 in the xz plane facing +y (n x n quads), for scene files",
-          {{"n", "1", "quads per side"}},
+          {{"n", "1", "quads per side", integer_in(1, 8192)}},
           [](const Params& p) {
             const int n = p.integer("n");
-            if (n < 1 || n > 8192) throw SpecError("plane: n must be in 1..8192");
             Scene s;
             const uint32_t mat = library::add_material(s, Vec3f::Constant(0.7f));
             const float step = 2.0f / static_cast<float>(n);
@@ -30,9 +28,7 @@ SceneGenerator plane_generator() {
                 const float x = -1.0f + step * static_cast<float>(i), z = -1.0f + step * static_cast<float>(j);
                 library::add_quad(s, Vec3f(x, 0, z), Vec3f(x, 0, z + step), Vec3f(x + step, 0, z + step), Vec3f(x + step, 0, z), mat);
               }
-            s.view = library::look_at(Vec3f::Zero(), Vec3f(0.3f, 1.0f, 0.8f), 3.5f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return library::with_view(std::move(s), library::look_at(Vec3f::Zero(), Vec3f(0.3f, 1.0f, 0.8f), 3.5f));
           }};
 }
 

@@ -45,13 +45,11 @@ struct Flake {
 SceneGenerator sphereflake_generator() {
   return {"sphereflake",
           "recursive spheres (Haines' SPD 'balls'): 9 children of 1/3 the radius per sphere, on a ground plane; root radius 1 at the origin",
-          {{"level", "3", "recursion depth (spheres: 1 + 9 + ... + 9^level)"},
-           {"segments", "16", "sphere tessellation: segments around, segments/2 rings"},
-           {"ground", "1", "add a ground plane (0: the flake alone, e.g. for scene files)"}},
+          {{"level", "3", "recursion depth (spheres: 1 + 9 + ... + 9^level)", integer_in(0, 7)},
+           {"segments", "16", "sphere tessellation: segments around, segments/2 rings", integer_in(4, 1024)},
+           {"ground", "1", "add a ground plane (0: the flake alone, e.g. for scene files)", boolean_flag()}},
           [](const Params& p) {
             const int level = p.integer("level"), segments = p.integer("segments");
-            if (level < 0 || level > 7) throw SpecError("sphereflake: level must be in 0..7");
-            if (segments < 4 || segments > 1024) throw SpecError("sphereflake: segments must be in 4..1024");
             const double spheres = (std::pow(9.0, level + 1) - 1.0) / 8.0;
             const double per_sphere = 2.0 * segments * (std::max(2, segments / 2) - 1);
             if (spheres * per_sphere > 1e8) throw SpecError("sphereflake: more than 1e8 triangles; lower level or segments");
@@ -66,9 +64,7 @@ SceneGenerator sphereflake_generator() {
             const Aabb b = s.bounds();
             if (p.boolean("ground"))
               add_ground(s, Vec3f(0, b.lo.y(), 0), 4.0f * std::max(b.diagonal().x(), b.diagonal().z()), add_material(s, Vec3f::Constant(0.5f)));
-            s.view = look_at(Vec3f(0, 0.1f, 0), Vec3f(1.0f, 0.8f, 1.6f), 6.4f, 40.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s), look_at(Vec3f(0, 0.1f, 0), Vec3f(1.0f, 0.8f, 1.6f), 6.4f, 40.0f));
           }};
 }
 

@@ -58,19 +58,16 @@ TriangleMesh make_knot(int along, int around, float radius) {
 SceneGenerator stadium_generator() {
   return {"stadium",
           "teapot in a stadium: a fine torus knot (2 along x around triangles) ~1 unit across in an open stadium ratio x larger",
-          {{"along", "2048", "knot tube segments along the curve"},
-           {"around", "48", "knot tube segments around"},
-           {"ratio", "1000", "stadium diameter / object size"},
-           {"sectors", "48", "stand sectors around the field"},
-           {"tiers", "12", "stand tiers"}},
+          {{"along", "2048", "knot tube segments along the curve", integer_in(3, kUnbounded)},
+           {"around", "48", "knot tube segments around", integer_in(3, kUnbounded)},
+           {"ratio", "1000", "stadium diameter / object size", real_in(4, 1e7)},
+           {"sectors", "48", "stand sectors around the field", integer_in(3, 4096)},
+           {"tiers", "12", "stand tiers", integer_in(1, 1024)}},
           [](const Params& p) {
             const int along = p.integer("along"), around = p.integer("around");
             const int sectors = p.integer("sectors"), tiers = p.integer("tiers");
             const double ratio = p.real("ratio");
-            if (along < 3 || around < 3 || static_cast<double>(along) * around > 5e7)
-              throw SpecError("stadium: need along >= 3, around >= 3 and at most 5e7 knot cells");
-            if (!(ratio >= 4.0 && ratio <= 1e7)) throw SpecError("stadium: ratio must be in [4, 1e7]");
-            if (sectors < 3 || sectors > 4096 || tiers < 1 || tiers > 1024) throw SpecError("stadium: sectors in 3..4096, tiers in 1..1024");
+            if (static_cast<double>(along) * around > 5e7) throw SpecError("stadium: at most 5e7 knot cells (along x around)");
             Scene s;
             const uint32_t knot_mat = add_material(s, Vec3f(0.80f, 0.30f, 0.15f));
             const uint32_t pedestal = add_material(s, Vec3f(0.60f, 0.60f, 0.60f));
@@ -112,9 +109,7 @@ SceneGenerator stadium_generator() {
                 }
               }
             }
-            s.view = look_at(Vec3f(0.0f, 0.5f, 0.0f), Vec3f(0.55f, 0.22f, 1.0f), 2.6f, 50.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s), look_at(Vec3f(0.0f, 0.5f, 0.0f), Vec3f(0.55f, 0.22f, 1.0f), 2.6f, 50.0f));
           }};
 }
 

@@ -42,18 +42,14 @@ float value_noise(uint64_t seed, int octave, float x, float z) {
 
 SceneGenerator terrain_generator() {
   return {"terrain", "fractal height field (fBm value noise) on [-1,1]^2 with lakes: 2 n^2 triangles",
-          {{"n", "256", "grid cells per side"},
+          {{"n", "256", "grid cells per side", integer_in(1, 8192)},
            seed_param(),
-           {"octaves", "8", "noise octaves (detail levels)"},
-           {"roughness", "0.5", "amplitude ratio between octaves (0..1): higher is rougher"},
-           {"height", "0.35", "height of the relief relative to the width 2"}},
+           {"octaves", "8", "noise octaves (detail levels)", integer_in(1, 24)},
+           {"roughness", "0.5", "amplitude ratio between octaves (0..1): higher is rougher", real_in(0, 1, Ends::Open)},
+           {"height", "0.35", "height of the relief relative to the width 2", real_in(0, 100)}},
           [](const Params& p) {
             const int n = p.integer("n"), octaves = p.integer("octaves");
             const double roughness = p.real("roughness"), height = p.real("height");
-            if (n < 1 || n > 8192) throw SpecError("terrain: n must be in 1..8192");
-            if (octaves < 1 || octaves > 24) throw SpecError("terrain: octaves must be in 1..24");
-            if (!(roughness > 0.0 && roughness < 1.0)) throw SpecError("terrain: roughness must be in (0, 1)");
-            if (!(height >= 0.0 && height <= 100.0)) throw SpecError("terrain: height must be in [0, 100]");
             const auto seed = static_cast<uint64_t>(p.integer("seed"));
             Scene s;
             const uint32_t water = add_material(s, Vec3f(0.10f, 0.22f, 0.35f));
@@ -99,9 +95,7 @@ SceneGenerator terrain_generator() {
                   s.material_ids.push_back(material_of(s.mesh.vertices[t[0]], s.mesh.vertices[t[1]], s.mesh.vertices[t[2]]));
                 }
               }
-            s.view = look_at(Vec3f(0, 0, 0.1f), Vec3f(0.9f, 0.75f, 1.5f), 2.9f, 45.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s), look_at(Vec3f(0, 0, 0.1f), Vec3f(0.9f, 0.75f, 1.5f), 2.9f, 45.0f));
           }};
 }
 

@@ -35,11 +35,10 @@ void subdivide(Scene& s, const std::array<Vec3f, 4>& t, int level, uint32_t mate
 
 SceneGenerator tetra_generator() {
   return {"tetra", "Sierpinski tetrahedron (Haines' SPD 'tetra'): 4^(level+1) equal triangles, edge 2, base on y=0, on a ground plane",
-          {{"level", "6", "subdivision depth (0..11)"},
-           {"ground", "1", "add a ground plane (0: the tetrahedron alone, e.g. for scene files)"}},
+          {{"level", "6", "subdivision depth (0..11)", integer_in(0, 11)},
+           {"ground", "1", "add a ground plane (0: the tetrahedron alone, e.g. for scene files)", boolean_flag()}},
           [](const Params& p) {
             const int level = p.integer("level");
-            if (level < 0 || level > 11) throw SpecError("tetra: level must be in 0..11");
             Scene s;
             const uint32_t mat = add_material(s, Vec3f(0.80f, 0.55f, 0.30f));
             // Regular tetrahedron with edge 2, base on y = 0, apex up.
@@ -48,9 +47,7 @@ SceneGenerator tetra_generator() {
                                             Vec3f(-0.5f * r, 0, -0.5f * 2.0f), Vec3f(0, h, 0)};
             subdivide(s, t, level, mat);
             if (p.boolean("ground")) add_ground(s, Vec3f(0, 0, 0), 8.0f, add_material(s, Vec3f::Constant(0.5f)));
-            s.view = look_at(Vec3f(0, 0.6f, 0), Vec3f(1.4f, 0.7f, 2.0f), 4.2f, 40.0f);
-            s.background = Vec3f::Constant(1.0f);
-            return s;
+            return with_view(std::move(s), look_at(Vec3f(0, 0.6f, 0), Vec3f(1.4f, 0.7f, 2.0f), 4.2f, 40.0f));
           }};
 }
 

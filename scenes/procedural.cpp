@@ -47,43 +47,31 @@ const std::vector<SceneGenerator>& scene_generators() {
       {"cornell", "the Cornell box from the published measurements (32 triangles, area light)", {},
        [](const Params&) { return make_cornell_box(); }},
       {"soup", "random triangles in the unit cube",
-       {{"n", "10000", "number of triangles"},
+       {{"n", "10000", "number of triangles", integer_in(0, kUnbounded)},
         seed_param(),
-        {"size", "1", "triangle extent relative to the mean spacing"}},
+        {"size", "1", "triangle extent relative to the mean spacing", real_in(0, kUnbounded, Ends::OpenLow)}},
        [](const Params& p) {
-         const int n = p.integer("n");
-         if (n < 0) throw SpecError("soup: n must be >= 0");
-         const double size = p.real("size");
-         if (!(size > 0.0)) throw SpecError("soup: size must be > 0");
-         Scene s = make_triangle_soup(static_cast<size_t>(n), static_cast<uint64_t>(p.integer("seed")),
-                                      static_cast<float>(size));
-         return s;
+         return make_triangle_soup(static_cast<size_t>(p.integer("n")), static_cast<uint64_t>(p.integer("seed")),
+                                   static_cast<float>(p.real("size")));
        }},
       {"copies", "n copies of the same triangle (degenerate input for subdivisions)",
-       {{"n", "1000", "number of copies"}},
-       [](const Params& p) {
-         const int n = p.integer("n");
-         if (n < 0 || n > 50'000'000) throw SpecError("copies: n must be in 0..5e7");
-         return make_triangle_copies(static_cast<size_t>(n));
-       }},
+       {{"n", "1000", "number of copies", integer_in(0, 5e7)}},
+       [](const Params& p) { return make_triangle_copies(static_cast<size_t>(p.integer("n"))); }},
       {"coplanar", "all triangles in one axis-aligned plane: a quad grid plus random overlapping triangles",
-       {{"n", "1000", "random triangles"},
-        {"grid", "16", "quads per side of the regular grid (0 = none)"},
-        {"axis", "2", "normal axis of the plane: 0, 1 or 2"},
+       {{"n", "1000", "random triangles", integer_in(0, 5e7)},
+        {"grid", "16", "quads per side of the regular grid (0 = none)", integer_in(0, 4096)},
+        {"axis", "2", "normal axis of the plane: 0, 1 or 2", integer_of({0, 1, 2})},
         seed_param()},
        [](const Params& p) {
-         const int n = p.integer("n"), grid = p.integer("grid"), axis = p.integer("axis");
-         if (n < 0 || n > 50'000'000) throw SpecError("coplanar: n must be in 0..5e7");
-         if (grid < 0 || grid > 4096) throw SpecError("coplanar: grid must be in 0..4096");
-         if (axis < 0 || axis > 2) throw SpecError("coplanar: axis must be 0, 1 or 2");
-         return make_coplanar_scene(static_cast<size_t>(n), grid, axis, static_cast<uint64_t>(p.integer("seed")));
+         return make_coplanar_scene(static_cast<size_t>(p.integer("n")), p.integer("grid"), p.integer("axis"),
+                                    static_cast<uint64_t>(p.integer("seed")));
        }},
       {"sphere", "closed tessellated UV sphere of radius 1 at the origin",
-       {{"segments", "64", "segments around the axis"}, {"rings", "32", "rings from pole to pole"}},
+       {{"segments", "64", "segments around the axis", integer_in(3, kUnbounded)},
+        {"rings", "32", "rings from pole to pole", integer_in(2, kUnbounded)}},
        [](const Params& p) {
          const int seg = p.integer("segments"), rings = p.integer("rings");
-         if (seg < 3 || rings < 2 || static_cast<long>(seg) * rings > 50'000'000L)
-           throw SpecError("sphere: need segments >= 3, rings >= 2 and at most 5e7 cells");
+         if (static_cast<long>(seg) * rings > 50'000'000L) throw SpecError("sphere: at most 5e7 cells (segments x rings)");
          TriangleMesh m = make_uv_sphere(seg, rings);
          const Aabb frame = m.bounds();
          return finish_scene("", std::move(m), frame);

@@ -20,7 +20,7 @@ struct SceneGenerator {
 const std::vector<SceneGenerator>& scene_generators();
 
 // The `seed` parameter every random generator declares.
-inline ParamInfo seed_param() { return ParamInfo{"seed", "1", "random seed"}; }
+inline ParamInfo seed_param() { return ParamInfo{"seed", "1", "random seed", integer_in(-kUnbounded, kUnbounded)}; }
 
 // The Cornell box from Cornell's published measurements (millimetres): two
 // white blocks, a red wall on the camera's left, a green one on its right,

@@ -1,16 +1,26 @@
 #pragma once
-// Agreement with brute force for the hybrid, BSP and sphere tests: the same
-// watertight kernel on the same triangles, so a missed cell or node shows up
-// as a different distance (compared bit for bit), and the triangle may
-// differ only at exactly equal distances.
+// Agreement with brute force for the structure tests above the structures
+// layer (octree family, hgrid, hybrid, BSP, spheres): the same watertight
+// kernel on the same triangles, so a missed cell or node shows up as a
+// different distance (compared bit for bit), and the triangle may differ
+// only at exactly equal distances.
 #include <gtest/gtest.h>
 
 #include <span>
+#include <string>
 #include <vector>
 
 #include "tests/brute_agreement.h"
 
 namespace raylab::test {
+
+// count_brute_mismatches() for a structure made from `spec`.
+inline size_t mismatches_vs_brute(const std::string& spec, const TriangleMesh& mesh, std::span<const Ray> rays,
+                                  std::string* first = nullptr) {
+  auto accel = make_accelerator(spec);
+  accel->build(mesh);
+  return count_brute_mismatches(*accel, mesh, rays, first);
+}
 
 // Rays aimed at points of the mesh's triangles (interior, edges, vertices)
 // from random directions, plus random rays through the box.

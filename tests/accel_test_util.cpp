@@ -102,6 +102,15 @@ std::vector<Ray> mesh_test_rays(const TriangleMesh& mesh, size_t count, uint64_t
   return rays;
 }
 
+CountedHits counted_hits(const std::string& spec, const TriangleMesh& mesh, std::span<const Ray> rays) {
+  auto accel = make_accelerator(spec);
+  accel->build(mesh);
+  CountedHits out{std::vector<Hit>(rays.size()), {}};
+  accel->intersect(rays, out.hits, &out.stats);
+  EXPECT_EQ(out.stats.rays, rays.size()) << spec;
+  return out;
+}
+
 std::vector<Ray> segment_rays(const TriangleMesh& mesh, size_t count, uint64_t seed) {
   const Aabb b = mesh.bounds();
   const Vec3f margin = Vec3f::Constant(0.05f * std::max(b.diagonal().norm(), 1e-30f));

@@ -54,6 +54,14 @@ std::vector<Ray> segment_rays(const TriangleMesh& mesh, size_t count, uint64_t s
 std::vector<Ray> surface_rays(const TriangleMesh& mesh, std::span<const Ray> rays, std::span<const Hit> hits,
                               uint64_t seed);
 
+// Closest hits of a structure made from `spec` and built on `mesh`, traced
+// with the counting kernels (stats.rays is expected to equal rays.size()).
+struct CountedHits {
+  std::vector<Hit> hits;
+  TraversalStats stats;
+};
+CountedHits counted_hits(const std::string& spec, const TriangleMesh& mesh, std::span<const Ray> rays);
+
 // Every spec the registry asks to cover, except the reference (Embree),
 // brute force itself (the ground truth) and Moller-Trumbore variants (a
 // different test may pick the other triangle at a shared edge).

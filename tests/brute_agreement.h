@@ -1,9 +1,9 @@
 #pragma once
 // Exact agreement with brute force, shared by the structure tests
-// (accel_agreement.h, brute_compare.h): the same watertight kernel on the same
-// triangles, so a node or cell the walk misses shows up as a different
-// distance (compared bit for bit); the triangle may differ only at exactly
-// equal distances.
+// (test_kdtree.cpp, and the others through accel_agreement.h): the same
+// watertight kernel on the same triangles, so a node or cell the walk misses
+// shows up as a different distance (compared bit for bit); the triangle may
+// differ only at exactly equal distances.
 #include <cstdio>
 #include <span>
 #include <string>

@@ -2,11 +2,15 @@
 // vertices and edges, degenerate polytopes), agreement with brute force
 // (bit-identical distances) including rays lying in triangle planes (the
 // planes the builder splits on), rays through vertices and edges, and the
-// candidate-set parameters.
+// candidate-set parameters; the packed 8-byte node encoding (every plane and
+// child kept, rays lying in diagonal and triangle planes).
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <stdexcept>
 
+#include "accel/bsp/bsp_packed_node.h"
 #include "accel/bsp/build_bsp.h"
 #include "accel/bsp/convex_polytope.h"
 #include "base/mesh_shapes.h"
@@ -201,10 +205,98 @@ TEST(Bsp, NoPlaneRepeatsOnAPathAndDiagonalNodesNameTheirDirection) {
     todo.push_back({node.index, it.path});
     todo.push_back({node.index + 1, it.path});
   }
-  const auto rays = test::rays_at_triangles(mesh, 300, 2);
-  auto acc = make_accelerator("bsp");
-  acc->build(mesh);
-  EXPECT_EQ(test::count_brute_mismatches(*acc, mesh, rays), 0u);
+  EXPECT_EQ(test::mismatches_vs_brute("bsp", mesh, test::rays_at_triangles(mesh, 300, 2)), 0u);
+}
+
+// The traced tree is the builder's repacked into 8-byte nodes: every node
+// keeps its plane (axis and diagonal: direction index and offset bits;
+// triangle plane: its side-array entry), its child pair or leaf range.
+TEST(Bsp, PackedNodesKeepEveryPlaneAndChild) {
+  const TriangleMesh mesh = make_uv_sphere(24, 12, Vec3f(0.1f, 0.2f, 0.3f), 0.7f);
+  BspBuildStats st;
+  const BspTree t = build_bsp(mesh, BspBuildOptions{}, &st);
+  ASSERT_GT(st.kdop_nodes, 0u);
+  ASSERT_GT(st.triangle_plane_nodes, 0u);
+  ASSERT_GT(st.axis_nodes, 0u);
+  const BspPackedTree p = pack_bsp_nodes(t.nodes);
+  ASSERT_EQ(p.nodes.size(), t.nodes.size());
+  EXPECT_EQ(p.planes.size(), st.triangle_plane_nodes);
+  size_t fixed = 0;
+  for (size_t i = 0; i < t.nodes.size(); ++i) {
+    const BspNode& b = t.nodes[i];
+    const BspPackedNode& n = p.nodes[i];
+    ASSERT_EQ(n.is_leaf(), b.is_leaf()) << i;
+    if (b.is_leaf()) {
+      EXPECT_EQ(n.first(), b.index);
+      EXPECT_EQ(n.count(), b.count());
+      continue;
+    }
+    EXPECT_EQ(n.child(), b.index);
+    if (b.kind() == kBspGeneral) {
+      ASSERT_TRUE(n.is_free_plane());
+      ASSERT_LT(n.plane(), p.planes.size());
+      const BspPlane& q = p.planes[n.plane()];
+      EXPECT_EQ(Vec3f(q.n[0], q.n[1], q.n[2]), Vec3f(b.n[0], b.n[1], b.n[2]));
+      EXPECT_EQ(std::bit_cast<uint32_t>(q.d), std::bit_cast<uint32_t>(b.d));
+    } else {
+      ++fixed;
+      ASSERT_LT(n.code(), 13u);
+      EXPECT_EQ(n.code(), b.kind() == kBspFixed ? b.direction() : b.kind());
+      EXPECT_EQ(bsp_fixed_directions()[n.code()], Vec3f(b.n[0], b.n[1], b.n[2]));
+      EXPECT_EQ(std::bit_cast<uint32_t>(n.offset()), std::bit_cast<uint32_t>(b.d));
+    }
+  }
+  EXPECT_EQ(fixed, st.axis_nodes + st.kdop_nodes);
+  // 28 bits of child index / leaf count: a clear error beyond.
+  EXPECT_EQ(BspPackedNode::leaf(7, kBspPackedMaxIndex).count(), kBspPackedMaxIndex);
+  EXPECT_THROW(BspPackedNode::leaf(0, kBspPackedMaxIndex + 1), std::length_error);
+}
+
+// Rays lying in the planes of diagonal and triangle-plane nodes (as far as
+// float allows: exactly parallel where the normal has a zero component), one
+// ulp beside them, and starting on them: the packed walk's per-ray
+// direction constants and side-array planes visit both sides when the ray is
+// within the margin, so every hit is found (bit-identical to brute force).
+TEST(Bsp, RaysLyingInDiagonalAndTrianglePlanes) {
+  const TriangleMesh mesh = make_uv_sphere(24, 12, Vec3f(0.1f, 0.2f, 0.3f), 0.7f);
+  const BspTree t = build_bsp(mesh, BspBuildOptions{}, nullptr);
+  const Vec3d center(0.1, 0.2, 0.3);
+  std::vector<Ray> rays;
+  size_t diagonal = 0, triangle = 0;
+  for (const BspNode& b : t.nodes) {
+    if (b.is_leaf() || b.kind() < 3) continue;
+    size_t& taken = b.kind() == kBspFixed ? diagonal : triangle;
+    if (taken >= 40) continue;
+    ++taken;
+    const Vec3d n = Vec3d(b.n[0], b.n[1], b.n[2]).normalized();
+    const Vec3d c = center - (n.dot(center) - static_cast<double>(b.d)) * n;  // the centre projected on the plane
+    const Vec3d u = n.unitOrthogonal(), v = n.cross(u);
+    for (int k = 0; k < 6; ++k) {
+      const double a = k * 3.14159265358979 / 6.0;
+      const Vec3f d = (std::cos(a) * u + std::sin(a) * v).cast<float>();
+      const Vec3f o = (c - 2.0 * d.cast<double>()).cast<float>();
+      rays.emplace_back(o, d);
+      rays.emplace_back(c.cast<float>(), d, 0.0f);
+      Vec3f beside = o;
+      beside[k % 3] = std::nextafter(beside[k % 3], 1e30f);
+      rays.emplace_back(beside, d);
+    }
+    // Exactly parallel: along a zero component of a face diagonal.
+    for (int a = 0; a < 3; ++a) {
+      if (b.n[a] != 0.0f) continue;
+      Vec3f d = Vec3f::Zero();
+      d[a] = 1.0f;
+      rays.emplace_back((c - 2.0 * d.cast<double>()).cast<float>(), d);
+    }
+  }
+  ASSERT_GT(diagonal, 0u);
+  ASSERT_GT(triangle, 0u);
+  for (const char* spec : {"bsp", "bsp:dirs=7"}) {
+    auto acc = make_accelerator(spec);
+    acc->build(mesh);
+    std::string first;
+    EXPECT_EQ(test::count_brute_mismatches(*acc, mesh, rays, &first), 0u) << spec << ": " << first;
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -156,7 +157,16 @@ TEST(Cli, AccelsJsonIsTheRegistry) {
     EXPECT_EQ(j[i]["capabilities"]["reference"].get<bool>(), info.caps.reference) << info.name;
     EXPECT_EQ(j[i]["capabilities"]["quadratic"].get<bool>(), info.caps.quadratic) << info.name;
     EXPECT_EQ(j[i]["description"].is_null(), !info.describe) << info.name;
+    for (size_t k = 0; k < info.params.size() && k < j[i]["params"].size(); ++k)
+      EXPECT_EQ(j[i]["params"][k]["valid"], info.params[k].check.describe()) << info.name << ":" << info.params[k].name;
   }
+  // A declared range as numbers: bsp's tplanes in 0..64.
+  const auto& bsp = *std::find_if(j.begin(), j.end(), [](const auto& a) { return a["name"] == "bsp"; });
+  const auto& tplanes = *std::find_if(bsp["params"].begin(), bsp["params"].end(),
+                                      [](const auto& p) { return p["name"] == "tplanes"; });
+  EXPECT_EQ(tplanes["kind"], "integer");
+  EXPECT_EQ(tplanes["range"]["min"].get<double>(), 0.0);
+  EXPECT_EQ(tplanes["range"]["max"].get<double>(), 64.0);
 }
 
 TEST(Cli, OutputInUnwritablePlaceFailsCleanly) {

@@ -457,16 +457,11 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
     rays.emplace_back(org, (target - org).normalized());
   }
   auto tests_per_ray = [&](const std::string& spec) {
-    auto a = make_accelerator(spec);
-    a->build(m);
-    std::vector<Hit> hits(rays.size());
-    TraversalStats st;
-    a->intersect(rays, hits, &st);
-    EXPECT_EQ(st.rays, rays.size());
+    const test::CountedHits traced = test::counted_hits(spec, m, rays);
     size_t hit_count = 0;
-    for (const Hit& h : hits) hit_count += h.valid();
+    for (const Hit& h : traced.hits) hit_count += h.valid();
     EXPECT_EQ(hit_count, rays.size()) << spec;  // every ray hits the object or the room
-    return static_cast<double>(st.triangle_tests) / static_cast<double>(st.rays);
+    return static_cast<double>(traced.stats.triangle_tests) / static_cast<double>(traced.stats.rays);
   };
   const double grid = tests_per_ray("grid");
   const double grid2 = tests_per_ray("grid2");

@@ -9,7 +9,7 @@
 
 #include "accel/registry.h"
 #include "scenes/procedural.h"
-#include "tests/brute_compare.h"
+#include "tests/accel_agreement.h"
 
 namespace raylab {
 namespace {

@@ -199,15 +199,7 @@ TEST(Irgrid, MergeAndExpandShrinkTheStadium) {
   std::vector<Ray> rays;
   Pcg32 rng(8, 3);
   for (int i = 0; i < 500; ++i) rays.emplace_back(Vec3f(-200.0f, 100.0f, 50.0f), unit_random(rng));
-  auto nodes_of = [&](const std::string& spec) {
-    auto accel = make_accelerator(spec);
-    accel->build(mesh);
-    std::vector<Hit> hits(rays.size());
-    TraversalStats st;
-    accel->intersect(rays, hits, &st);
-    EXPECT_EQ(st.rays, rays.size());
-    return st.nodes_visited;
-  };
+  auto nodes_of = [&](const std::string& spec) { return test::counted_hits(spec, mesh, rays).stats.nodes_visited; };
   const uint64_t plain_nodes = nodes_of("irgrid:merge=0,expand=0");
   const uint64_t merged_nodes = nodes_of("irgrid:expand=0");
   const uint64_t full_nodes = nodes_of("irgrid");

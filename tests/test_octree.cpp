@@ -16,7 +16,7 @@
 #include "accel/octree/traverse_octree.h"
 #include "accel/registry.h"
 #include "scenes/procedural.h"
-#include "tests/brute_compare.h"
+#include "tests/accel_agreement.h"
 
 namespace raylab {
 namespace {
@@ -143,11 +143,7 @@ TEST(Octree, MatchesBruteForceOnProceduralScenes) {
   const TriangleMesh scenes[] = {make_cornell_box().mesh, make_triangle_soup(300, 3).mesh,
                                  make_uv_sphere(24, 12, Vec3f(0.3f, -0.2f, 0.1f), 0.8f)};
   for (const TriangleMesh& mesh : scenes) {
-    const auto rays = test::rays_at_triangles(mesh, 1500, 11);
-    for (const char* spec : kOctreeSpecs) {
-      std::string first;
-      EXPECT_EQ(test::mismatches_vs_brute(spec, mesh, rays, &first), 0u) << spec << ": " << first;
-    }
+    test::expect_specs_agree_with_brute(kOctreeSpecs, mesh, {test::rays_at_triangles(mesh, 1500, 11)});
   }
 }
 
@@ -186,10 +182,7 @@ TEST(Octree, RaysInAndAlongDividingPlanesAndSignedZeros) {
       }
     }
   }
-  for (const char* spec : kOctreeSpecs) {
-    std::string first;
-    EXPECT_EQ(test::mismatches_vs_brute(spec, mesh, rays, &first), 0u) << spec << ": " << first;
-  }
+  test::expect_specs_agree_with_brute(kOctreeSpecs, mesh, {rays});
 }
 
 TEST(Octree, RaysStartingInsideWithTminTmaxWindows) {
@@ -203,10 +196,7 @@ TEST(Octree, RaysStartingInsideWithTminTmaxWindows) {
     r.tmax = (i % 4 == 0) ? std::numeric_limits<float>::infinity() : r.tmin + 2.0f * rng.uniform();
     rays.push_back(r);
   }
-  for (const char* spec : kOctreeSpecs) {
-    std::string first;
-    EXPECT_EQ(test::mismatches_vs_brute(spec, mesh, rays, &first), 0u) << spec << ": " << first;
-  }
+  test::expect_specs_agree_with_brute(kOctreeSpecs, mesh, {rays});
 }
 
 // ------------------------------------------------------------ builder

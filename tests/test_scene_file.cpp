@@ -142,7 +142,7 @@ TEST(SceneFile, ErrorsNameTheFileAndTheJsonPointer) {
       {R"({"meshes": [{"file": "x.obj", "params": {}}]})", "/meshes/0/params: \"params\" belongs to a \"generator\""},
       {R"({"meshes": [{"generator": "sphere:rings=4", "params": {"rings": 5}}]})", "/meshes/0/params/rings: given both"},
       {R"({"meshes": [{"generator": "teapot"}]})", "/meshes/0/generator: unknown scene 'teapot'"},
-      {R"({"meshes": [{"generator": "sphere", "params": {"segments": 1}}]})", "/meshes/0/params: sphere: need segments >= 3"},
+      {R"({"meshes": [{"generator": "sphere", "params": {"segments": 1}}]})", "/meshes/0/params: sphere: segments must be >= 3, got 1"},
       {R"({"meshes": [{"generator": "sphere", "params": {"bogus": 1}}]})", "/meshes/0/params:"},
       {R"({"meshes": [{"file": "missing.obj"}]})", "/meshes/0/file: "},
       {R"({"meshes": [{"file": "other.json"}]})", "/meshes/0/file: scene files cannot include other scene files"},

@@ -5,6 +5,7 @@
 #include "accel/bsp/build_bsp.h"
 #include "accel/bsp/convex_polytope.h"
 #include "accel/bsp/traverse_bsp.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/core/view_accelerator.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
@@ -32,14 +33,30 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
     BspBuildStats bs;
+    for (int k = 0; k < 13; ++k) {
+      const Vec3f& u = bsp_fixed_directions()[k];
+      directions_.x[k] = u.x(), directions_.y[k] = u.y(), directions_.z[k] = u.z();
+    }
     BspTree tree = build_bsp(mesh, opt_, &bs);
-    nodes_ = std::move(tree.nodes);
-    // Triangles copied once, in the order the leaves first use them (as the k-d tree does).
-    IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.prim_ids);
-    tris_ = std::move(leaf_tris.tris);
-    ids_ = std::move(leaf_tris.ids);
-    view_ = BspView{nodes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                    bsp_fixed_directions(), opt_.directions};
+    BspPackedTree packed = pack_bsp_nodes(tree.nodes);
+    tree.nodes = {};
+    nodes_ = std::move(packed.nodes);
+    planes_ = std::move(packed.planes);
+    tris_.clear();
+    ids_.clear();
+    blocks_.clear();
+    if (leaf_blocks_wanted(true, this->triangle_test())) {
+      // SIMD leaves (the k-d tree's 4-wide blocks) replace the indices and the triangle copies.
+      for (BspPackedNode& n : nodes_)
+        if (n.is_leaf()) n = BspPackedNode::leaf(append_kd_leaf_blocks(mesh, tree.prim_ids.data() + n.first(), n.count(), blocks_), n.count());
+    } else {
+      // Triangles copied once, in the order the leaves first use them (as the k-d tree does).
+      IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.prim_ids);
+      tris_ = std::move(leaf_tris.tris);
+      ids_ = std::move(leaf_tris.ids);
+    }
+    view_ = BspView{nodes_.data(), planes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
+                    &directions_, blocks_.empty() ? nullptr : blocks_.data()};
 
     const TreeShape shape{.nodes = nodes_.size(),
                           .inner = nodes_.size() - bs.leaves,
@@ -51,7 +68,8 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
                           .avg_leaf_depth = bs.leaves ? bs.leaf_depth_sum / static_cast<double>(bs.leaves) : 0.0,
                           .sah_cost = bs.sah_cost};
     BuildStats s = tree_build_stats(shape, mesh.num_triangles());
-    s.bytes = nodes_.size() * sizeof(BspNode) + tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t);
+    s.bytes = nodes_.size() * sizeof(BspPackedNode) + planes_.size() * sizeof(BspPlane) +
+              tris_.size() * sizeof(LeafTriangle) + ids_.size() * sizeof(uint32_t) + blocks_.size() * sizeof(KdTriangleBlock);
     s.extra["axis_nodes"] = static_cast<double>(bs.axis_nodes);
     s.extra["kdop_nodes"] = static_cast<double>(bs.kdop_nodes);
     s.extra["triangle_plane_nodes"] = static_cast<double>(bs.triangle_plane_nodes);
@@ -62,10 +80,18 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
  private:
   bool outline_node(uint32_t index, const ConvexPolytope& region, int depth, int max_depth,
                     StructureOutline& out) const {
-    const BspNode& node = nodes_[index];
+    const BspPackedNode& node = nodes_[index];
     if (node.is_leaf() || depth + 1 > max_depth || region.empty()) return true;
-    const Vec3d n(node.n[0], node.n[1], node.n[2]);
-    const double d = node.d;
+    Vec3d n;
+    double d;
+    if (node.is_free_plane()) {
+      const BspPlane& p = planes_[node.plane()];
+      n = Vec3d(p.n[0], p.n[1], p.n[2]);
+      d = p.d;
+    } else {
+      n = bsp_fixed_directions()[node.code()].cast<double>();
+      d = node.offset();
+    }
     auto [below, above] = region.split(n, d);
     // The cap: the face of `below` lying in the plane.
     const double tol = 1e-9 * (1.0 + std::abs(d)) * (1.0 + n.norm());
@@ -80,13 +106,16 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
       }
       break;
     }
-    return outline_node(node.index, below, depth + 1, max_depth, out) &&
-           outline_node(node.index + 1, above, depth + 1, max_depth, out);
+    return outline_node(node.child(), below, depth + 1, max_depth, out) &&
+           outline_node(node.child() + 1, above, depth + 1, max_depth, out);
   }
 
-  std::vector<BspNode> nodes_;
+  BspDirectionTable directions_;
+  std::vector<BspPackedNode> nodes_;
+  std::vector<BspPlane> planes_;
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
+  std::vector<KdTriangleBlock> blocks_;  // C++17 aligned new honours the 32-byte alignment
 };
 
 }  // namespace
@@ -96,24 +125,23 @@ AcceleratorInfo bsp_accelerator_info() {
       "bsp",
       "general BSP tree (Ize, Wald & Parker 2008): axis, 26-DOP and triangle planes, SAH on exact polytope areas, "
       "k-d fast path for axis nodes",
-      {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)"},
-       {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)"},
-       {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes"},
+      {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)",
+        integer_of({3, 7, 13})},
+       {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
+       {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
+        integer_in(2, 64).or_number(0)},
        sah_traversal_cost_param(),
        sah_intersection_cost_param(),
-       depth_limit_param()},
+       depth_limit_param(kBspMaxDepthLimit)},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
-        if (o.directions != 3 && o.directions != 7 && o.directions != 13) throw SpecError("bsp: dirs must be 3, 7 or 13");
         o.triangle_planes = p.integer("tplanes");
-        if (o.triangle_planes < 0 || o.triangle_planes > 64) throw SpecError("bsp: tplanes must be in 0..64");
         o.bins = p.integer("bins");
-        if (o.bins != 0 && (o.bins < 2 || o.bins > 64)) throw SpecError("bsp: bins must be 0 or in 2..64");
-        const SahCosts costs = parse_sah_costs(p, "bsp");
+        const SahCosts costs = parse_sah_costs(p);
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
-        o.max_depth = parse_depth_limit(p, "bsp", kBspMaxDepthLimit);
+        o.max_depth = parse_depth_limit(p);
         return std::make_unique<BspAccel>(o, parse_triangle_test(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and

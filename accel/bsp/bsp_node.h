@@ -1,5 +1,6 @@
 #pragma once
-// BSP tree layout: 24-byte nodes in one flat array, children in pairs (the
+// The BSP builder's output (repacked into 8-byte nodes for tracing,
+// bsp_packed_node.h): 24-byte nodes in one flat array, children in pairs (the
 // child below the plane at `child`, the one above at `child + 1`), leaves
 // referring to ranges of an index array, as in the k-d tree
 // (accel/kdtree/kdtree_node.h) of which this is the generalisation.

@@ -323,59 +323,57 @@ AcceleratorInfo bvh_accelerator_info() {
       "bvh",
       fmt::format("BVH family: SAH builders, optional reinsertion, SAH-optimal wide collapse, SIMD kernels ({})",
                   simd::isa_name()),
-      {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)"},
-       {"layout", "bvh8", "traversal layout: bvh2, bvh4 or bvh8"},
-       {"opt", "none", "post-build optimisation: none or reinsert"},
-       {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)"},
-       {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)"},
-       {"bins", "32", "SAH bins per axis (2..256)"},
-       {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse"},
-       {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area"},
-       {"sbudget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count"},
-       {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references"},
-       {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)"},
-       {"opt_rounds", "32", "reinsert: at most this many rounds (work-bounded: the tree does not depend on machine load)"},
-       {"ct", "2", "collapse SAH cost of a node visit (relative to ci)"},
-       {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)"},
+      {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)",
+        one_of({"binned", "sweep", "sbvh", "lbvh"})},
+       {"layout", "bvh8", "traversal layout: bvh2, bvh4 or bvh8", one_of({"bvh2", "bvh4", "bvh8"})},
+       {"opt", "none", "post-build optimisation: none or reinsert", one_of({"none", "reinsert"})},
+       {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)",
+        integer_in(1, 255).or_word("auto")},
+       {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)", integer_of({4, 8, 16})},
+       {"bins", "32", "SAH bins per axis (2..256)", integer_in(2, 256)},
+       {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse",
+        integer_in(1, 16)},
+       {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area",
+        real_in(0, kUnbounded).as_float()},
+       {"sbudget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count", real_in(0, 4).as_float()},
+       {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references",
+        integer_in(0, kUnbounded)},
+       {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)", integer_in(2, 256)},
+       {"opt_rounds", "32", "reinsert: at most this many rounds (work-bounded: the tree does not depend on machine load)",
+        integer_in(0, 1000)},
+       {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
+       {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
        triangle_test_param("; mt with layout=bvh2 only"),
-       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)"},
-       {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)"}},
+       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)",
+        integer_of({0, kPacketSize})},
+       {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
+        one_of({"box", "sphere"})}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
-        const auto& b = p.choice("builder", {"binned", "sweep", "sbvh", "lbvh"});
+        const auto& b = p.str("builder");
         c.builder = b == "sweep" ? BuilderKind::Sweep : b == "sbvh" ? BuilderKind::Sbvh : b == "lbvh" ? BuilderKind::Lbvh : BuilderKind::Binned;
-        c.spheres = p.choice("bound", {"box", "sphere"}) == "sphere";
+        c.spheres = p.str("bound") == "sphere";
         if (c.spheres && p.given("layout") && p.str("layout") != "bvh2")
           throw SpecError("bvh: bound=sphere needs layout=bvh2");
-        const auto& l = c.spheres ? std::string("bvh2") : p.choice("layout", {"bvh2", "bvh4", "bvh8"});
+        const auto& l = c.spheres ? std::string("bvh2") : p.str("layout");
         c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : LayoutKind::Bvh8;
-        c.reinsert = p.choice("opt", {"none", "reinsert"}) == "reinsert";
+        c.reinsert = p.str("opt") == "reinsert";
         c.block = p.integer("block");
-        if (c.block != 4 && c.block != 8 && c.block != 16) throw SpecError("bvh: block must be 4, 8 or 16");
+        // The leaf limit depends on the layout (a wide leaf holds at most kMaxBlocks blocks).
         c.leaf = p.str("leaf") == "auto" ? (c.layout == LayoutKind::Bvh2 ? 4 : 2 * c.block) : p.integer("leaf");
         const int max_leaf = c.layout == LayoutKind::Bvh2 ? 255 : static_cast<int>(wide_ref::kMaxBlocks) * c.block;
-        if (c.leaf < 1 || c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
+        if (c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
         c.bins = p.integer("bins");
         c.binary_leaf = p.integer("bleaf");
-        if (c.binary_leaf < 1 || c.binary_leaf > 16) throw SpecError("bvh: bleaf must be in 1..16");
-        if (c.bins < 2 || c.bins > 256) throw SpecError("bvh: bins must be in 2..256");
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("sbudget"));
         c.opt_rounds = p.integer("opt_rounds");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
-        if (c.spatial_bins < 2 || c.spatial_bins > 256) throw SpecError("bvh: sbins must be in 2..256");
-        if (c.spatial_min < 0) throw SpecError("bvh: smin must be >= 0");
-        if (!(c.alpha >= 0.0f) || !(c.split_budget >= 0.0f && c.split_budget <= 4.0f))
-          throw SpecError("bvh: alpha must be >= 0 and sbudget in 0..4");
-        if (c.opt_rounds < 0 || c.opt_rounds > 1000) throw SpecError("bvh: opt_rounds must be in 0..1000");
         c.node_cost = static_cast<float>(p.real("ct"));
         c.block_cost = static_cast<float>(p.real("ci"));
-        if (!(c.node_cost > 0.0f && c.block_cost > 0.0f && std::isfinite(c.node_cost) && std::isfinite(c.block_cost)))
-          throw SpecError("bvh: ct and ci must be positive");
         c.tri = parse_triangle_test(p);
         c.packet = p.integer("packet");
-        if (c.packet != 0 && c.packet != kPacketSize) throw SpecError("bvh: packet must be 0 or 16");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
           throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");

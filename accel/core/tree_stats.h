@@ -61,35 +61,31 @@ inline std::vector<StatInfo> tree_stat_infos(const std::string& references, cons
 }
 
 // The SAH constants a builder steers by (its K_T and K_I; the reported cost
-// uses accel/core/sah_report.h's), declared and checked in one place.
+// uses accel/core/sah_report.h's), declared with their ranges in one place.
 inline ParamInfo sah_traversal_cost_param(const char* restriction = "") {
-  return ParamInfo{"ct", "15", std::string(restriction) + "SAH cost of a traversal step (K_T)"};
+  return ParamInfo{"ct", "15", std::string(restriction) + "SAH cost of a traversal step (K_T)", real_in(0, 1e6)};
 }
 inline ParamInfo sah_intersection_cost_param(const char* restriction = "") {
-  return ParamInfo{"ci", "20", std::string(restriction) + "SAH cost of a triangle test (K_I)"};
+  return ParamInfo{"ci", "20", std::string(restriction) + "SAH cost of a triangle test (K_I)",
+                   real_in(0, 1e6, Ends::OpenLow)};
 }
 
 struct SahCosts {
   float traversal, intersection;
 };
 
-inline SahCosts parse_sah_costs(const Params& p, const char* accel) {
-  const double ct = p.real("ct"), ci = p.real("ci");
-  if (!(ct >= 0.0 && ct <= 1e6)) throw SpecError(fmt::format("{}: ct must be in [0, 1e6]", accel));
-  if (!(ci > 0.0 && ci <= 1e6)) throw SpecError(fmt::format("{}: ci must be in (0, 1e6]", accel));
-  return {static_cast<float>(ct), static_cast<float>(ci)};
+inline SahCosts parse_sah_costs(const Params& p) {
+  return {static_cast<float>(p.real("ct")), static_cast<float>(p.real("ci"))};
 }
 
 // `max_depth`: auto (-1: the builder's 8 + 1.3 log2 N) or 0..limit.
-inline ParamInfo depth_limit_param() {
-  return ParamInfo{"max_depth", "auto", "depth limit: auto = 8 + 1.3 log2 N, or 0..64"};
+inline ParamInfo depth_limit_param(int limit) {
+  return ParamInfo{"max_depth", "auto", fmt::format("depth limit: auto = 8 + 1.3 log2 N, or 0..{}", limit),
+                   integer_in(0, limit).or_word("auto")};
 }
 
-inline int parse_depth_limit(const Params& p, const char* accel, int limit) {
-  if (p.str("max_depth") == "auto") return -1;
-  const int d = p.integer("max_depth");
-  if (d < 0 || d > limit) throw SpecError(fmt::format("{}: max_depth must be auto or in 0..{}", accel, limit));
-  return d;
+inline int parse_depth_limit(const Params& p) {
+  return p.str("max_depth") == "auto" ? -1 : p.integer("max_depth");
 }
 
 }  // namespace raylab

@@ -8,11 +8,12 @@ namespace raylab {
 
 inline ParamInfo triangle_test_param(const char* restriction = "") {
   return ParamInfo{"tri", "watertight",
-                   std::string("triangle test: watertight (Woop et al. 2013) or mt (Moller-Trumbore)") + restriction};
+                   std::string("triangle test: watertight (Woop et al. 2013) or mt (Moller-Trumbore)") + restriction,
+                   one_of({"watertight", "mt"})};
 }
 
 inline TriangleTest parse_triangle_test(const Params& p) {
-  return p.choice("tri", {"watertight", "mt"}) == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight;
+  return p.str("tri") == "mt" ? TriangleTest::MollerTrumbore : TriangleTest::Watertight;
 }
 
 }  // namespace raylab

@@ -344,19 +344,20 @@ AcceleratorInfo embree_accelerator_info() {
   AcceleratorInfo info{
       "embree",
       "Embree 3 reference (rtcIntersect1/rtcOccluded1 per ray; packet and stream APIs with api=)",
-      {{"quality", "medium", "build quality: low, medium (Embree's default) or high"},
-       {"robust", "0", "1 = RTC_SCENE_FLAG_ROBUST (watertight-style robust traversal)"},
-       {"compact", "0", "1 = RTC_SCENE_FLAG_COMPACT"},
+      {{"quality", "medium", "build quality: low, medium (Embree's default) or high", one_of({"low", "medium", "high"})},
+       {"robust", "0", "1 = RTC_SCENE_FLAG_ROBUST (watertight-style robust traversal)", boolean_flag()},
+       {"compact", "0", "1 = RTC_SCENE_FLAG_COMPACT", boolean_flag()},
        {"api", "single",
         "single (rtcIntersect1), packet4/packet8/packet16 (rtcIntersect4/8/16, rays packed in the order given), "
-        "stream (rtcIntersect1M)"},
-       {"coherent", "0", "1 = RTC_INTERSECT_CONTEXT_FLAG_COHERENT"}},
+        "stream (rtcIntersect1M)",
+        one_of({"single", "packet4", "packet8", "packet16", "stream"})},
+       {"coherent", "0", "1 = RTC_INTERSECT_CONTEXT_FLAG_COHERENT", boolean_flag()}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
-        const std::string& q = p.choice("quality", {"low", "medium", "high"});
+        const std::string& q = p.str("quality");
         const RTCBuildQuality quality = q == "low"    ? RTC_BUILD_QUALITY_LOW
                                         : q == "high" ? RTC_BUILD_QUALITY_HIGH
                                                       : RTC_BUILD_QUALITY_MEDIUM;
-        const std::string& a = p.choice("api", {"single", "packet4", "packet8", "packet16", "stream"});
+        const std::string& a = p.str("api");
         const Api api = a == "packet4"    ? Api::packet4
                         : a == "packet8"  ? Api::packet8
                         : a == "packet16" ? Api::packet16

@@ -38,18 +38,12 @@ struct alignas(4 * N) ValidMask {
 
 template <class RayN>
 inline void put_ray(RayN& p, int k, const RTCRay& r) {
-  p.org_x[k] = r.org_x;
-  p.org_y[k] = r.org_y;
-  p.org_z[k] = r.org_z;
-  p.tnear[k] = r.tnear;
-  p.dir_x[k] = r.dir_x;
-  p.dir_y[k] = r.dir_y;
-  p.dir_z[k] = r.dir_z;
-  p.time[k] = r.time;
-  p.tfar[k] = r.tfar;
-  p.mask[k] = r.mask;
-  p.id[k] = r.id;
-  p.flags[k] = r.flags;
+  // Lane k of each of the packet's arrays, grouped as origin, direction,
+  // interval and time, and the ray's flags.
+  p.org_x[k] = r.org_x, p.org_y[k] = r.org_y, p.org_z[k] = r.org_z;
+  p.dir_x[k] = r.dir_x, p.dir_y[k] = r.dir_y, p.dir_z[k] = r.dir_z;
+  p.tnear[k] = r.tnear, p.tfar[k] = r.tfar, p.time[k] = r.time;
+  p.mask[k] = r.mask, p.id[k] = r.id, p.flags[k] = r.flags;
 }
 
 template <int N>

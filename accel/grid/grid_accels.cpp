@@ -44,9 +44,8 @@ template <typename Grid, Grid (*kBuild)(const TriangleMesh&, const GridOptions&,
 AcceleratorInfo grid_info(const char* name, const char* help, bool with_res, bool with_top,
                           double build_peak_bytes_per_triangle) {
   AcceleratorInfo info{name, help, grid_param_infos(with_res, with_top),
-                       [name, with_res, with_top](const Params& p) -> std::unique_ptr<Accelerator> {
-                         return std::make_unique<GridAccel<Grid, kBuild>>(
-                             parse_grid_options(name, p, with_res, with_top));
+                       [with_res, with_top](const Params& p) -> std::unique_ptr<Accelerator> {
+                         return std::make_unique<GridAccel<Grid, kBuild>>(parse_grid_options(p, with_res, with_top));
                        }};
   complete_grid_info(info);
   info.build_peak_bytes_per_triangle = build_peak_bytes_per_triangle;
@@ -61,12 +60,14 @@ AcceleratorInfo grid_accelerator_info() {
       true, false, 75);  // peak bytes per triangle: measured 68 on soup:n=10^7
   // storage=implicit (accel/grid/implicit_grid.h): the same resolution and
   // DDA, cells found as the AND of per-slab bit arrays.
-  info.params.push_back({"storage", "dense", "dense (a list per cell) or implicit (a bit array per x, y and z slab; "
-                                             "a cell's triangles = the AND of its three; bounding-box assignment)"});
+  info.params.push_back({"storage", "dense",
+                         "dense (a list per cell) or implicit (a bit array per x, y and z slab; "
+                         "a cell's triangles = the AND of its three; bounding-box assignment)",
+                         one_of({"dense", "implicit"})});
   info.make = [dense = info.make](const Params& p) -> std::unique_ptr<Accelerator> {
-    if (p.choice("storage", {"dense", "implicit"}) == "dense") return dense(p);
+    if (p.str("storage") == "dense") return dense(p);
     if (p.given("assign")) throw SpecError("grid: assign does not apply to storage=implicit (bounding boxes by slab)");
-    return std::make_unique<GridAccel<ImplicitGrid, build_implicit_grid>>(parse_grid_options("grid", p, true, false));
+    return std::make_unique<GridAccel<ImplicitGrid, build_implicit_grid>>(parse_grid_options(p, true, false));
   };
   info.cover.push_back("grid:storage=implicit");
   info.stats.insert(info.stats.end(), {{"slabs", "storage=implicit: slab bit arrays (nx + ny + nz)"},

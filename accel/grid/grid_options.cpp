@@ -12,30 +12,25 @@ namespace raylab {
 std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top) {
   std::vector<ParamInfo> p;
   p.push_back({"density", "1", with_top ? "lambda of the sub-grids: cells ~ density * triangles of the top cell"
-                                        : "lambda of the n^(1/3) rule: cells ~ density * triangles (0 < density <= 1e4)"});
-  if (with_top) p.push_back({"top", "0.0625", "lambda of the top-level grid (0 < top <= 1e4)"});
+                                        : "lambda of the n^(1/3) rule: cells ~ density * triangles (0 < density <= 1e4)",
+               real_in(0, 1e4, Ends::OpenLow)});
+  if (with_top) p.push_back({"top", "0.0625", "lambda of the top-level grid (0 < top <= 1e4)", real_in(0, 1e4, Ends::OpenLow)});
   if (with_res) p.push_back({"res", "auto", "explicit resolution AxBxC (overrides density)"});
-  p.push_back({"budget", "1024", "memory budget in MiB; exceeding it lowers density (warning)"});
-  p.push_back({"assign", "exact", "triangle-to-cell assignment: exact (SAT, Akenine-Moller 2001) or bbox"});
+  p.push_back({"budget", "1024", "memory budget in MiB; exceeding it lowers density (warning)",
+               real_in(0, 1024.0 * 1024.0, Ends::OpenLow)});
+  p.push_back({"assign", "exact", "triangle-to-cell assignment: exact (SAT, Akenine-Moller 2001) or bbox",
+               one_of({"exact", "bbox"})});
   p.push_back(triangle_test_param());
   return p;
 }
 
-GridOptions parse_grid_options(const std::string& owner, const Params& p, bool with_res, bool with_top) {
+GridOptions parse_grid_options(const Params& p, bool with_res, bool with_top) {
   GridOptions o;
   o.density = p.real("density");
-  if (!(o.density > 0.0 && o.density <= 1e4))
-    throw SpecError(fmt::format("{}: density must be in (0, 1e4], got {}", owner, p.str("density")));
-  if (with_top) {
-    o.top_density = p.real("top");
-    if (!(o.top_density > 0.0 && o.top_density <= 1e4))
-      throw SpecError(fmt::format("{}: top must be in (0, 1e4], got {}", owner, p.str("top")));
-  }
+  if (with_top) o.top_density = p.real("top");
   if (with_res && p.str("res") != "auto") o.res = parse_grid_resolution(p.str("res"));
   o.budget_mib = p.real("budget");
-  if (!(o.budget_mib > 0.0 && o.budget_mib <= 1024.0 * 1024.0))
-    throw SpecError(fmt::format("{}: budget must be in (0, 1048576] MiB, got {}", owner, p.str("budget")));
-  o.assign = p.choice("assign", {"exact", "bbox"}) == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
+  o.assign = p.str("assign") == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
   o.test = parse_triangle_test(p);
   return o;
 }

@@ -30,11 +30,13 @@ struct GridOptions {
   uint64_t budget_bytes() const { return static_cast<uint64_t>(budget_mib * 1024.0 * 1024.0); }
 };
 
-// Declared parameters; `with_res` adds res=, `with_top` adds top= (grid2).
+// Declared parameters with their valid values; `with_res` adds res=,
+// `with_top` adds top= (grid2).
 std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top);
 
-// Reads and checks the parameters; throws SpecError naming the bad one.
-GridOptions parse_grid_options(const std::string& owner, const Params& p, bool with_res, bool with_top);
+// Reads the parameters (Params checked them; res= is parsed here and throws
+// SpecError when malformed).
+GridOptions parse_grid_options(const Params& p, bool with_res, bool with_top);
 
 // The registry entries shared by the grids (capabilities, specs to cover,
 // statistic keys) for `name`: "grid", "hashgrid" or "grid2".

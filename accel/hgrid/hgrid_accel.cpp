@@ -61,15 +61,15 @@ AcceleratorInfo hgrid_accelerator_info() {
       "hgrid",
       "hierarchical grid (Ericson 7.2): levels of cell side ratio^l, each triangle at one level, shared hashed "
       "cells, per-level 3D-DDA merged by distance",
-      {{"ratio", "2", "cell side ratio between successive levels, in [1.25, 16]"},
-       {"neighbours", "store", "store (list a triangle in each cell of its level it overlaps, <= 8) or pad "
-                               "(list it in its centre's cell; the walk looks up each cell's 3x3x3 neighbourhood)"}},
+      {{"ratio", "2", "cell side ratio between successive levels, in [1.25, 16]", real_in(1.25, 16)},
+       {"neighbours", "store",
+        "store (list a triangle in each cell of its level it overlaps, <= 8) or pad "
+        "(list it in its centre's cell; the walk looks up each cell's 3x3x3 neighbourhood)",
+        one_of({"store", "pad"})}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         HgridOptions opt;
         opt.ratio = p.real("ratio");
-        if (!(opt.ratio >= 1.25 && opt.ratio <= 16.0)) throw SpecError("hgrid: ratio must be in [1.25, 16]");
-        opt.neighbours = p.choice("neighbours", {"store", "pad"}) == "pad" ? HgridNeighbours::Pad
-                                                                          : HgridNeighbours::Store;
+        opt.neighbours = p.str("neighbours") == "pad" ? HgridNeighbours::Pad : HgridNeighbours::Store;
         return std::make_unique<HgridAccel>(opt, parse_triangle_test(p));
       });
   info.cover = {"hgrid:neighbours=pad"};

@@ -170,19 +170,17 @@ AcceleratorInfo hybrid_accelerator_info() {
       "hybrid",
       "hybrid schemes: a coarse grid of small BVHs / k-d trees (3D-DDA, each tree traced over its cell's interval), "
       "or a grid of entry nodes into one k-d tree",
-      {{"top", "grid", "top level: grid (a uniform grid by the n^(1/3) rule; the only top level so far)"},
-       {"inner", "bvh", "bvh or kdtree (one tree per non-empty cell), or entry (one k-d tree + grid of entry nodes)"},
-       {"density", "0.0625", "top cells per triangle (lambda of the n^(1/3) rule), in (0, 64]"},
-       {"leaf", "4", "inner=bvh: largest leaf of the cell BVHs (1..64)"}},
+      {{"top", "grid", "top level: grid (a uniform grid by the n^(1/3) rule; the only top level so far)", one_of({"grid"})},
+       {"inner", "bvh", "bvh or kdtree (one tree per non-empty cell), or entry (one k-d tree + grid of entry nodes)",
+        one_of({"bvh", "kdtree", "entry"})},
+       {"density", "0.0625", "top cells per triangle (lambda of the n^(1/3) rule), in (0, 64]", real_in(0, 64, Ends::OpenLow)},
+       {"leaf", "4", "inner=bvh: largest leaf of the cell BVHs (1..64)", integer_in(1, 64)}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         HybridConfig c;
-        p.choice("top", {"grid"});
-        const std::string& inner = p.choice("inner", {"bvh", "kdtree", "entry"});
+        const std::string& inner = p.str("inner");
         c.inner = inner == "kdtree" ? InnerKind::KdTree : inner == "entry" ? InnerKind::Entry : InnerKind::Bvh;
         c.density = p.real("density");
-        if (!(c.density > 0.0 && c.density <= 64.0)) throw SpecError("hybrid: density must be in (0, 64]");
         c.leaf = p.integer("leaf");
-        if (c.leaf < 1 || c.leaf > 64) throw SpecError("hybrid: leaf must be in 1..64");
         if (p.given("leaf") && c.inner != InnerKind::Bvh) throw SpecError("hybrid: leaf applies to inner=bvh only");
         c.tri = parse_triangle_test(p);
         if (c.inner == InnerKind::Bvh) return std::make_unique<GridOfTreesAccel<CellBvhForest>>(c);

@@ -68,24 +68,24 @@ AcceleratorInfo irgrid_accelerator_info() {
       "irgrid",
       "irregular grid (Perard-Gayot, Kalojanov & Slusallek 2017): top grid, octree-subdivided cells merged by "
       "expected cost and expanded over neighbours they contain, walked cell to cell through a voxel map",
-      {{"top", "0.125", "top grid density lambda_1 (top cells ~ top x triangles), in (0, 64]"},
-       {"sub", "0.125", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]"},
-       {"step", "2", "cost of entering a cell in triangle tests, for the octree's split and the merge pass's "
-                     "cost model, in [0, 1000]"},
-       {"depth", "12", "deepest octree level below a top cell, 0..16"},
-       {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)"},
-       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)"},
-       {"simd", "1", "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)"}},
+      {{"top", "0.125", "top grid density lambda_1 (top cells ~ top x triangles), in (0, 64]", real_in(0, 64, Ends::OpenLow)},
+       {"sub", "0.125", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]",
+        real_in(0, 1024, Ends::OpenLow)},
+       {"step", "2",
+        "cost of entering a cell in triangle tests, for the octree's split and the merge pass's cost model, in [0, 1000]",
+        real_in(0, 1000)},
+       {"depth", "12", "deepest octree level below a top cell, 0..16", integer_in(0, 16)},
+       {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)",
+        boolean_flag()},
+       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()},
+       {"simd", "1", "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)",
+        boolean_flag()}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
-        if (!(opt.top_density > 0.0 && opt.top_density <= 64.0)) throw SpecError("irgrid: top must be in (0, 64]");
         opt.sub_density = p.real("sub");
-        if (!(opt.sub_density > 0.0 && opt.sub_density <= 1024.0)) throw SpecError("irgrid: sub must be in (0, 1024]");
         opt.step_cost = p.real("step");
-        if (!(opt.step_cost >= 0.0 && opt.step_cost <= 1000.0)) throw SpecError("irgrid: step must be in [0, 1000]");
         opt.max_depth = p.integer("depth");
-        if (opt.max_depth < 0 || opt.max_depth > 16) throw SpecError("irgrid: depth must be in 0..16");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
         return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), p.boolean("simd"));

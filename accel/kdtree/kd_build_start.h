@@ -1,15 +1,14 @@
 #pragma once
 // The start both k-d tree builders share: the size limit, the depth limit in
-// force, and every triangle's box with their union (computed in parallel).
+// force, and every triangle's box with their union (accel/core/triangle_boxes.h).
 #include <algorithm>
 #include <stdexcept>
 #include <vector>
 
 #include <fmt/format.h>
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 
+#include "accel/core/triangle_boxes.h"
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kd_tree_writer.h"
 #include "accel/kdtree/kdtree_node.h"
@@ -28,21 +27,6 @@ inline int kd_build_depth_limit(const TriangleMesh& mesh, const KdBuildOptions& 
 inline KdTree empty_kdtree(KdTreeWriter& writer) {
   writer.set_leaf(0, {});
   return writer.finish(Aabb::empty());
-}
-
-// boxes[i] = the bounds of triangle i; returns their union.
-inline Aabb kd_triangle_boxes(const TriangleMesh& mesh, std::vector<Aabb>& boxes) {
-  boxes.resize(mesh.num_triangles());
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, boxes.size(), 8192), Aabb(),
-      [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          boxes[i] = mesh.triangle_bounds(i);
-          acc.extend(boxes[i]);
-        }
-        return acc;
-      },
-      [](const Aabb& a, const Aabb& b) { return merge(a, b); });
 }
 
 // Subtrees of at least this many triangles are built as parallel tasks.
@@ -75,7 +59,7 @@ class KdBuilderBase {
   KdTree run_from_root(size_t max_triangles, BuildRoot&& build_root) {
     max_depth_ = kd_build_depth_limit(mesh_, opt_, max_triangles);
     if (mesh_.num_triangles() == 0) return empty_kdtree(writer_);
-    const Aabb bounds = kd_triangle_boxes(mesh_, tri_boxes_);
+    const Aabb bounds = triangle_boxes(mesh_, tri_boxes_);
     build_root(bounds);
     return writer_.finish(bounds);
   }

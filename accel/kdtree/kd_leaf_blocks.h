@@ -9,6 +9,7 @@
 // Width 4: k-d tree leaves are small (SAH leaves average 2-4 triangles with
 // the default costs), so a 4-wide block wastes fewer lanes and half the
 // memory of an 8-wide one; measured in docs/fair-fight.md.
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -24,6 +25,19 @@ using KdTriangleBlock = TriangleBlock<kKdBlockWidth>;
 
 inline uint32_t kd_leaf_blocks(uint32_t count) { return (count + kKdBlockWidth - 1) / kKdBlockWidth; }
 
+// Appends the blocks of one leaf (its `count` triangle ids) and returns the
+// index of its first block; shared with the BSP tree's leaves (accel/bsp).
+inline uint32_t append_kd_leaf_blocks(const TriangleMesh& mesh, const uint32_t* ids, uint32_t count,
+                                      std::vector<KdTriangleBlock>& blocks) {
+  const uint32_t begin = static_cast<uint32_t>(blocks.size());
+  for (uint32_t i = 0; i < count; i += kKdBlockWidth) {
+    blocks.emplace_back();
+    fill_block<kKdBlockWidth>(blocks.back(), ids + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
+                              [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+  }
+  return begin;
+}
+
 // Fills the blocks of every leaf, in node order (a leaf's blocks follow the
 // previous leaf's), and rewrites each leaf's offset to its first block.
 inline std::vector<KdTriangleBlock> make_kd_leaf_blocks(const TriangleMesh& mesh, std::span<KdNode> nodes,
@@ -31,14 +45,7 @@ inline std::vector<KdTriangleBlock> make_kd_leaf_blocks(const TriangleMesh& mesh
   std::vector<KdTriangleBlock> blocks;
   for (KdNode& n : nodes) {
     if (!n.is_leaf()) continue;
-    const uint32_t count = n.count(), first = n.offset();
-    const uint32_t begin = static_cast<uint32_t>(blocks.size());
-    for (uint32_t i = 0; i < count; i += kKdBlockWidth) {
-      blocks.emplace_back();
-      fill_block<kKdBlockWidth>(blocks.back(), prim_ids.data() + first + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
-                                [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
-    }
-    n = KdNode::leaf(begin, count);
+    n = KdNode::leaf(append_kd_leaf_blocks(mesh, prim_ids.data() + n.offset(), n.count(), blocks), n.count());
   }
   return blocks;
 }

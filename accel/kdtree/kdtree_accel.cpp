@@ -81,17 +81,20 @@ AcceleratorInfo kdtree_accelerator_info() {
   AcceleratorInfo info{
       "kdtree",
       "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal",
-      {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)"},
+      {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)",
+        one_of({"sah", "median"})},
        sah_traversal_cost_param("builder=sah: "),
        sah_intersection_cost_param("builder=sah: "),
-       {"empty_bonus", "0.2", "builder=sah: cost reduction of splits with an empty child, in [0, 1)"},
-       {"clip", "1", "perfect splits: clip straddling triangles to the cells (0 = bounding boxes)"},
-       depth_limit_param(),
-       {"leaf", "2", "builder=median: cells with at most this many triangles become leaves"},
+       {"empty_bonus", "0.2", "builder=sah: cost reduction of splits with an empty child, in [0, 1)",
+        real_in(0, 1, Ends::OpenHigh)},
+       {"clip", "1", "perfect splits: clip straddling triangles to the cells (0 = bounding boxes)", boolean_flag()},
+       depth_limit_param(kKdMaxDepthLimit),
+       {"leaf", "2", "builder=median: cells with at most this many triangles become leaves", integer_in(1, kUnbounded)},
        triangle_test_param(),
-       {"simd", "1", "1 = leaves as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar kernels only (same hits)"}},
+       {"simd", "1", "1 = leaves as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar kernels only (same hits)",
+        boolean_flag()}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
-        const KdBuilder builder = p.choice("builder", {"sah", "median"}) == "median" ? KdBuilder::Median : KdBuilder::Sah;
+        const KdBuilder builder = p.str("builder") == "median" ? KdBuilder::Median : KdBuilder::Sah;
         KdBuildOptions opt;
         if (builder == KdBuilder::Median) {
           for (const char* key : {"ct", "ci", "empty_bonus"})
@@ -99,16 +102,13 @@ AcceleratorInfo kdtree_accelerator_info() {
         } else if (p.given("leaf")) {
           throw SpecError("kdtree: leaf applies to builder=median only (the SAH decides leaf sizes)");
         }
-        const SahCosts costs = parse_sah_costs(p, "kdtree");
-        const double bonus = p.real("empty_bonus");
-        if (!(bonus >= 0.0 && bonus < 1.0)) throw SpecError("kdtree: empty_bonus must be in [0, 1)");
+        const SahCosts costs = parse_sah_costs(p);
         opt.traversal_cost = costs.traversal;
         opt.intersection_cost = costs.intersection;
-        opt.empty_bonus = static_cast<float>(bonus);
+        opt.empty_bonus = static_cast<float>(p.real("empty_bonus"));
         opt.perfect_splits = p.boolean("clip");
-        opt.max_depth = parse_depth_limit(p, "kdtree", kKdMaxDepthLimit);
+        opt.max_depth = parse_depth_limit(p);
         opt.median_leaf_size = p.integer("leaf");
-        if (opt.median_leaf_size < 1) throw SpecError("kdtree: leaf must be >= 1");
         return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"));
       }};
   info.caps.mt_variant = "tri=mt";

@@ -2,10 +2,8 @@
 
 #include <array>
 #include <memory>
-#include <stdexcept>
 #include <vector>
 
-#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include "accel/octree/octree_tmp_tree.h"
@@ -23,11 +21,7 @@ class LooseBuilder {
       : opt_(opt), boxes_(boxes), tri_boxes_(tri_boxes) {}
 
   void build(OctTmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
-    if (ids.size() <= opt_.leaf || level >= opt_.max_depth) {
-      n.nonempty = !ids.empty();
-      n.refs = std::move(ids);
-      return;
-    }
+    if (keep_as_leaf(n, ids, level, opt_.leaf, opt_.max_depth)) return;
     const uint32_t half = OctreeCube::span(level + 1);
     float mid[3];
     for (int k = 0; k < 3; ++k) mid[k] = boxes_.cube.plane(k, c[k] + half);
@@ -76,30 +70,14 @@ class LooseBuilder {
 }  // namespace
 
 OctreeTree build_loose_octree(const TriangleMesh& mesh, const LooseOctreeOptions& opt, LooseBoxes& boxes) {
-  OctreeTree tree;
-  tree.depth_limit = opt.max_depth;
-  const size_t n = mesh.num_triangles();
-  if (n > UINT32_MAX) throw std::length_error("loose_octree: more than 2^32 triangles");
-  std::vector<Aabb> tri_boxes(n);
-  Aabb bounds;
-  for (size_t i = 0; i < n; ++i) {
-    tri_boxes[i] = mesh.triangle_bounds(i);
-    bounds.extend(tri_boxes[i]);
-  }
   boxes.grow_per_unit = static_cast<float>(0.5 * (opt.looseness - 1.0));
-  if (n == 0) {
-    tree.nodes.assign(1, OctreeNode{});
-    return tree;
-  }
-  tree.cube = octree_cube_around(bounds);
-  boxes.cube = tree.cube;
-  std::vector<uint32_t> ids(n);
-  for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
-  OctTmpNode root;
-  const uint32_t origin[3] = {0, 0, 0};
-  LooseBuilder(opt, boxes, tri_boxes).build(root, std::move(ids), 0, origin);
-  flatten_octree(root, tree, "loose_octree");
-  return tree;
+  return build_octree_tree(mesh, opt.max_depth, "loose_octree",
+                           [&](const OctreeCube& cube, const std::vector<Aabb>& tri_boxes, OctTmpNode& root,
+                               std::vector<uint32_t> ids) {
+                             boxes.cube = cube;
+                             const uint32_t origin[3] = {0, 0, 0};
+                             LooseBuilder(opt, boxes, tri_boxes).build(root, std::move(ids), 0, origin);
+                           });
 }
 
 }  // namespace raylab

@@ -1,7 +1,5 @@
 #include "accel/loose_octree/loose_octree_accel.h"
 
-#include <fmt/format.h>
-
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
@@ -9,6 +7,8 @@
 #include "accel/core/triangle_test_param.h"
 #include "accel/loose_octree/build_loose_octree.h"
 #include "accel/loose_octree/traverse_loose_octree.h"
+#include "accel/octree/octree_outline.h"
+#include "accel/octree/octree_params.h"
 
 namespace raylab {
 
@@ -28,32 +28,16 @@ class LooseOctreeAccel final : public BatchAccelerator<LooseOctreeAccel> {
 
   // raylab show: the loose boxes of the nodes down to max_depth.
   void outline(int max_depth, StructureOutline& out) const override {
-    if (view_.empty) return;
-    out.what = "loose octree node boxes";
-    struct Item {
-      uint32_t node;
-      uint32_t c[3];
-      int level;
-    };
-    std::vector<Item> stack{{0u, {0, 0, 0}, 0}};
-    while (!stack.empty()) {
-      const Item it = stack.back();
-      stack.pop_back();
-      const OctreeNode& n = nodes_[it.node];
-      float lo[3], hi[3];
-      view_.boxes.box(it.level, it.c, lo, hi);
-      // Loose boxes clipped to the scene's bounds (they overhang it).
-      const Aabb box(Vec3f(lo[0], lo[1], lo[2]).cwiseMax(bounds_.lo), Vec3f(hi[0], hi[1], hi[2]).cwiseMin(bounds_.hi));
-      if (!out.add(OutlineBox{box, it.level, n.mask() == 0}))
-        return;
-      if (it.level >= max_depth || n.mask() == 0) continue;
-      const uint32_t h = OctreeCube::span(it.level + 1);
-      for (uint32_t c = 0; c < 8; ++c)
-        if (n.mask() >> c & 1u)
-          stack.push_back({n.first_child + c,
-                           {it.c[0] + (c & 1u ? h : 0u), it.c[1] + (c & 2u ? h : 0u), it.c[2] + (c & 4u ? h : 0u)},
-                           it.level + 1});
-    }
+    walk_octree_outline(out, "loose octree node boxes", view_.empty, 0u, max_depth,
+        [&](uint32_t node, int level, const uint32_t c[3]) {
+          const uint32_t mask = nodes_[node].mask();
+          float lo[3], hi[3];
+          view_.boxes.box(level, c, lo, hi);
+          // Loose boxes clipped to the scene's bounds (they overhang it).
+          const Aabb box(Vec3f(lo[0], lo[1], lo[2]).cwiseMax(bounds_.lo), Vec3f(hi[0], hi[1], hi[2]).cwiseMin(bounds_.hi));
+          return out.add(OutlineBox{box, level, mask == 0}) ? static_cast<int>(mask) : -1;
+        },
+        [&](uint32_t node, int, uint32_t i) { return nodes_[node].first_child + i; });
   }
 
  protected:
@@ -102,22 +86,16 @@ AcceleratorInfo loose_octree_accelerator_info() {
       "loose_octree",
       "loose octree (Ulrich 2000): node boxes grown by k, each triangle once at the deepest node containing it, "
       "children walked by entry distance",
-      {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)"},
-       {"leaf", "4", "a node with at most this many triangles keeps them (1..1000)"},
-       {"max_depth", "20", "depth limit, root = 0 (0..20)"},
-       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"}},
+      {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)", real_in(1, 4)},
+       octree_leaf_param("a node with at most this many triangles keeps them (1..1000)"),
+       {"max_depth", "20", "depth limit, root = 0 (0..20)", integer_in(0, kOctMaxLevel)},
+       octree_simd_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         LooseOctreeOptions opt;
         opt.looseness = p.real("k");
-        if (!(opt.looseness >= 1.0 && opt.looseness <= 4.0)) throw SpecError("loose_octree: k must be in [1, 4]");
-        const int leaf = p.integer("leaf");
-        if (leaf < 1 || leaf > 1000) throw SpecError("loose_octree: leaf must be in 1..1000");
-        opt.leaf = static_cast<uint32_t>(leaf);
+        opt.leaf = static_cast<uint32_t>(p.integer("leaf"));
         opt.max_depth = p.integer("max_depth");
-        if (opt.max_depth < 0 || opt.max_depth > kOctMaxLevel)
-          throw SpecError(fmt::format("loose_octree: max_depth must be in 0..{}", kOctMaxLevel));
-        const bool simd = p.boolean("simd");
-        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), simd);
+        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), p.boolean("simd"));
       });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"loose_octree:k=1.25", "loose_octree:simd=0"};

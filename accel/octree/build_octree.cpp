@@ -4,13 +4,9 @@
 #include <bit>
 #include <cmath>
 #include <memory>
-#include <stdexcept>
 #include <vector>
 
-#include <fmt/format.h>
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include "accel/grid/tri_box_overlap.h"
 #include "accel/core/sah_report.h"
@@ -34,11 +30,7 @@ class OctreeBuilder {
       : mesh_(mesh), opt_(opt), cube_(cube), boxes_(boxes) {}
 
   void build(OctTmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
-    if (ids.size() <= opt_.leaf || level >= opt_.max_depth) {
-      n.nonempty = !ids.empty();
-      n.refs = std::move(ids);
-      return;
-    }
+    if (keep_as_leaf(n, ids, level, opt_.leaf, opt_.max_depth)) return;
     const uint32_t half = OctreeCube::span(level + 1);
     float mid[3];
     double lo[3][3];  // [axis][0 = low plane, 1 = mid plane, 2 = high plane]
@@ -139,33 +131,12 @@ class OctreeBuilder {
 }  // namespace
 
 OctreeTree build_octree(const TriangleMesh& mesh, const OctreeBuildOptions& opt) {
-  OctreeTree tree;
-  tree.depth_limit = opt.max_depth;
-  const size_t n = mesh.num_triangles();
-  if (n > UINT32_MAX) throw std::length_error("octree: more than 2^32 triangles");
-  std::vector<Aabb> boxes(n);
-  const Aabb bounds = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, 8192), Aabb(),
-      [&](const tbb::blocked_range<size_t>& r, Aabb acc) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          boxes[i] = mesh.triangle_bounds(i);
-          acc.extend(boxes[i]);
-        }
-        return acc;
-      },
-      [](const Aabb& a, const Aabb& b) { return merge(a, b); });
-  if (n == 0) {
-    tree.nodes.assign(1, OctreeNode{});
-    return tree;
-  }
-  tree.cube = octree_cube_around(bounds);
-  std::vector<uint32_t> ids(n);
-  for (size_t i = 0; i < n; ++i) ids[i] = static_cast<uint32_t>(i);
-  OctTmpNode root;
-  const uint32_t origin[3] = {0, 0, 0};
-  OctreeBuilder(mesh, opt, tree.cube, boxes).build(root, std::move(ids), 0, origin);
-  flatten_octree(root, tree, "octree");
-  return tree;
+  return build_octree_tree(mesh, opt.max_depth, "octree",
+                           [&](const OctreeCube& cube, const std::vector<Aabb>& boxes, OctTmpNode& root,
+                               std::vector<uint32_t> ids) {
+                             const uint32_t origin[3] = {0, 0, 0};
+                             OctreeBuilder(mesh, opt, cube, boxes).build(root, std::move(ids), 0, origin);
+                           });
 }
 
 OctreeShape measure_octree(const OctreeTree& tree) {

@@ -1,7 +1,5 @@
 #include "accel/octree/octree_accel.h"
 
-#include <fmt/format.h>
-
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
@@ -9,6 +7,8 @@
 #include "accel/core/triangle_test_param.h"
 #include "accel/octree/build_octree.h"
 #include "accel/octree/octree_leaf_blocks.h"
+#include "accel/octree/octree_outline.h"
+#include "accel/octree/octree_params.h"
 #include "accel/octree/traverse_octree.h"
 
 namespace raylab {
@@ -37,34 +37,16 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
 
   // raylab show: node cubes down to max_depth (leaves drawn as leaves).
   void outline(int max_depth, StructureOutline& out) const override {
-    if (view_.empty) return;
-    out.what = "octree node cubes";
-    struct Item {
-      uint64_t h;
-      uint32_t c[3];
-      int level;
-    };
-    std::vector<Item> stack{{Layout::kRoot, {0, 0, 0}, 0}};
-    while (!stack.empty()) {
-      const Item it = stack.back();
-      stack.pop_back();
-      const OctNodeRec n = view_.layout.node(it.h, it.level);
-      const uint32_t s = OctreeCube::span(it.level), mask = n.meta & 0xffu;
-      // Cubes clipped to the scene's bounds (the root cube overhangs them).
-      const Aabb box(Vec3f(view_.cube.plane(0, it.c[0]), view_.cube.plane(1, it.c[1]), view_.cube.plane(2, it.c[2]))
-                         .cwiseMax(bounds_.lo),
-                     Vec3f(view_.cube.plane(0, it.c[0] + s), view_.cube.plane(1, it.c[1] + s),
-                           view_.cube.plane(2, it.c[2] + s))
-                         .cwiseMin(bounds_.hi));
-      if (!out.add(OutlineBox{box, it.level, mask == 0})) return;
-      if (it.level >= max_depth || mask == 0) continue;
-      const uint32_t h = s / 2;
-      for (uint32_t c = 0; c < 8; ++c)
-        if (mask >> c & 1u)
-          stack.push_back({view_.layout.child(it.h, n, c),
-                           {it.c[0] + (c & 1u ? h : 0u), it.c[1] + (c & 2u ? h : 0u), it.c[2] + (c & 4u ? h : 0u)},
-                           it.level + 1});
-    }
+    walk_octree_outline(out, "octree node cubes", view_.empty, Layout::kRoot, max_depth,
+        [&](uint64_t node, int level, const uint32_t c[3]) {
+          const uint32_t s = OctreeCube::span(level), mask = view_.layout.node(node, level).meta & 0xffu;
+          // Cubes clipped to the scene's bounds (the root cube overhangs them).
+          const Aabb box(Vec3f(view_.cube.plane(0, c[0]), view_.cube.plane(1, c[1]), view_.cube.plane(2, c[2])).cwiseMax(bounds_.lo),
+                         Vec3f(view_.cube.plane(0, c[0] + s), view_.cube.plane(1, c[1] + s), view_.cube.plane(2, c[2] + s))
+                             .cwiseMin(bounds_.hi));
+          return out.add(OutlineBox{box, level, mask == 0}) ? static_cast<int>(mask) : -1;
+        },
+        [&](uint64_t node, int level, uint32_t i) { return view_.layout.child(node, view_.layout.node(node, level), i); });
   }
 
  protected:
@@ -143,37 +125,39 @@ AcceleratorInfo octree_accelerator_info() {
   AcceleratorInfo info = structure_info(
       "octree",
       "regular octree over the bounding cube, exact SAT assignment, parametric traversal (Revelles et al. 2000)",
-      {{"leaf", "4", "a node with at most this many triangles becomes a leaf (1..1000)"},
-       {"max_depth", "16", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)"},
-       {"growth", "2", "assign=exact: no split whose children hold more than growth x the node's references, in [1, 8] (coplanar or touching faces would otherwise split to max_depth)"},
-       {"term", "sah", "sah (split a node above leaf only when the surface-area cost of its eight children beats the leaf) or count (split every node above leaf, within growth)"},
-       {"ct", "2", "term=sah: cost of a node visit, in 4-wide triangle-block tests (0..100)"},
-       {"assign", "exact", "exact (every leaf the triangle overlaps, SAT) or straddle (triangles crossing a "
-                           "dividing plane stay at the inner node, each stored once)"},
-       {"storage", "pointer", "pointer (8-child blocks, one index per node), linear (complete tree by level, "
-                              "children by index arithmetic) or hash (Morton location codes, occupied nodes only)"},
-       {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB"},
-       {"simd", "1", "1 = node lists as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar tests of the same lists (same hits)"}},
+      {octree_leaf_param("a node with at most this many triangles becomes a leaf (1..1000)"),
+       {"max_depth", "16", "depth limit, root = 0 (0..20); storage=linear defaults to 6 (its array grows as 8^depth)",
+        integer_in(0, kOctMaxLevel)},
+       {"growth", "2",
+        "assign=exact: no split whose children hold more than growth x the node's references, in [1, 8] (coplanar or "
+        "touching faces would otherwise split to max_depth)",
+        real_in(1, 8)},
+       {"term", "sah",
+        "sah (split a node above leaf only when the surface-area cost of its eight children beats the leaf) or count "
+        "(split every node above leaf, within growth)",
+        one_of({"count", "sah"})},
+       {"ct", "2", "term=sah: cost of a node visit, in 4-wide triangle-block tests (0..100)", real_in(0, 100)},
+       {"assign", "exact",
+        "exact (every leaf the triangle overlaps, SAT) or straddle (triangles crossing a dividing plane stay at the "
+        "inner node, each stored once)",
+        one_of({"exact", "straddle"})},
+       {"storage", "pointer",
+        "pointer (8-child blocks, one index per node), linear (complete tree by level, children by index arithmetic) "
+        "or hash (Morton location codes, occupied nodes only)",
+        one_of({"pointer", "linear", "hash"})},
+       {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB", real_in(0, 1e6, Ends::OpenLow)},
+       octree_simd_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         OctreeOptions opt;
-        const int leaf = p.integer("leaf");
-        if (leaf < 1 || leaf > 1000) throw SpecError("octree: leaf must be in 1..1000");
-        opt.build.leaf = static_cast<uint32_t>(leaf);
-        opt.build.max_depth = p.integer("max_depth");
-        if (!p.given("max_depth") && p.str("storage") == "linear") opt.build.max_depth = 6;
-        if (opt.build.max_depth < 0 || opt.build.max_depth > kOctMaxLevel)
-          throw SpecError(fmt::format("octree: max_depth must be in 0..{}", kOctMaxLevel));
+        opt.build.leaf = static_cast<uint32_t>(p.integer("leaf"));
+        const std::string& storage = p.str("storage");
+        opt.build.max_depth = p.given("max_depth") || storage != "linear" ? p.integer("max_depth") : 6;
         opt.build.max_growth = p.real("growth");
-        if (!(opt.build.max_growth >= 1.0 && opt.build.max_growth <= 8.0)) throw SpecError("octree: growth must be in [1, 8]");
-        opt.build.sah = p.choice("term", {"count", "sah"}) == "sah";
+        opt.build.sah = p.str("term") == "sah";
         opt.build.ct = p.real("ct");
-        if (!(opt.build.ct >= 0.0 && opt.build.ct <= 100.0)) throw SpecError("octree: ct must be in [0, 100]");
         if (p.given("ct") && !opt.build.sah) throw SpecError("octree: ct applies to term=sah only");
-        opt.build.assign = p.choice("assign", {"exact", "straddle"}) == "straddle" ? OctreeAssign::Straddle
-                                                                                   : OctreeAssign::Exact;
-        const std::string& storage = p.choice("storage", {"pointer", "linear", "hash"});
+        opt.build.assign = p.str("assign") == "straddle" ? OctreeAssign::Straddle : OctreeAssign::Exact;
         opt.budget_mib = p.real("budget");
-        if (!(opt.budget_mib > 0.0 && opt.budget_mib <= 1e6)) throw SpecError("octree: budget must be in (0, 1e6] MiB");
         if (p.given("budget") && storage != "linear") throw SpecError("octree: budget applies to storage=linear only");
         opt.simd = p.boolean("simd");
         const TriangleTest test = parse_triangle_test(p);

@@ -7,6 +7,10 @@
 
 namespace raylab {
 
+void check_octree_triangle_count(size_t triangles, const char* what) {
+  if (triangles > UINT32_MAX) throw std::length_error(fmt::format("{}: more than 2^32 triangles", what));
+}
+
 void flatten_octree(const OctTmpNode& root, OctreeTree& tree, const char* what) {
   std::vector<std::pair<const OctTmpNode*, uint32_t>> stack{{&root, 0u}};
   tree.nodes.assign(1, OctreeNode{});
