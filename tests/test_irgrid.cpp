@@ -3,9 +3,11 @@
 // rays starting inside and rays with +-0 direction components; the passes'
 // effect on the teapot in a stadium; bad parameters; the outline.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,9 +19,10 @@
 namespace raylab {
 namespace {
 
+// simd=0: the scalar mailboxed walk; the others test the SIMD leaf blocks.
 const std::vector<std::string> kIrgridSpecs = {"irgrid", "irgrid:merge=0", "irgrid:expand=0",
                                                "irgrid:merge=0,expand=0", "irgrid:top=1,depth=1",
-                                               "irgrid:top=0.01,step=4,depth=5"};
+                                               "irgrid:top=0.01,step=4,depth=5", "irgrid:simd=0"};
 
 Vec3f unit_random(Pcg32& rng) {
   while (true) {
@@ -203,6 +206,52 @@ TEST(Irgrid, MergeAndExpandShrinkTheStadium) {
   EXPECT_LT(merged_nodes, plain_nodes);
   EXPECT_LT(full_nodes, merged_nodes);
   EXPECT_GT(cells_of("irgrid").extra.at("expanded_cells"), 0.0);
+}
+
+// tri=mt runs the scalar walk with the Moller-Trumbore test (no blocks):
+// the same hits as brute force with that test.
+TEST(Irgrid, MollerTrumboreVariantMatchesBruteForceWithTheSameTest) {
+  const TriangleMesh mesh = test::soup(400, 5).mesh;
+  const std::vector<Ray> rays = test::mesh_test_rays(mesh, 1500, 4);
+  auto grid = make_accelerator("irgrid:tri=mt");
+  auto brute = make_accelerator("brute:tri=mt");
+  grid->build(mesh);
+  brute->build(mesh);
+  size_t bad = 0, hits = 0;
+  for (const Ray& r : rays) {
+    const Hit a = grid->intersect1(r), b = brute->intersect1(r);
+    bad += a.valid() != b.valid() || (a.valid() && (a.t != b.t || a.prim != b.prim));
+    hits += b.valid();
+  }
+  EXPECT_GT(hits, rays.size() / 10);
+  EXPECT_EQ(bad, 0u);
+}
+
+// The merge and expand passes and the octrees run in parallel; the grid must
+// not depend on the thread count: every cell's box and occupancy (outline)
+// and every statistic equal with 1 thread and with all.
+TEST(Irgrid, SameGridForAnyThreadCount) {
+  const TriangleMesh mesh = test::teapot_in_stadium_mesh();
+  auto built = [&](int threads, StructureOutline& out) {
+    std::unique_ptr<tbb::global_control> limit;
+    if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    auto accel = make_accelerator("irgrid");
+    const BuildStats s = accel->build(mesh);
+    accel->outline(1, out);
+    return s;
+  };
+  StructureOutline one, all;
+  const BuildStats s1 = built(1, one), sa = built(0, all);
+  EXPECT_GT(s1.extra.at("merged_pairs"), 0.0);
+  EXPECT_EQ(s1.extra, sa.extra);
+  EXPECT_EQ(s1.bytes, sa.bytes);
+  ASSERT_EQ(one.boxes.size(), all.boxes.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < one.boxes.size(); ++i) {
+    const OutlineBox &a = one.boxes[i], &b = all.boxes[i];
+    differ += a.box.lo != b.box.lo || a.box.hi != b.box.hi || a.leaf != b.leaf || a.depth != b.depth;
+  }
+  EXPECT_EQ(differ, 0u);
 }
 
 TEST(Irgrid, EmptyMeshAndInvalidRaysMiss) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -52,6 +53,7 @@ class IrgridBuilder {
   size_t merge_cells();
   size_t expand_cells();
   void finish(BuildStats& stats);
+  void make_leaf_blocks(const TriangleMesh& mesh);
 
   // Calls f(entry) for every leaf entry of the voxel map (a cell id, by
   // reference) whose octree node overlaps the virtual box [lo, hi).
@@ -298,33 +300,59 @@ void IrgridBuilder::subdivide_top_cells(const std::vector<uint32_t>& top_offsets
 // than the two cells' together. Each round pairs every cell with at most
 // one neighbour (so runs of cells merge as balanced pairs, as the paper's
 // parallel merge does), alternating the axes until no pair merges.
+//
+// A round is the sequential scan "for each cell i in order: merge i with its
+// neighbour j if neither is taken yet and the cost allows" in two phases.
+// The costly part, each cell's candidate and its cost test (a list union),
+// runs in parallel on the cells as they were at the start of the round;
+// then the scan takes the pairs in order. The result is the sequential
+// scan's: a pair the scan merges involves two cells no earlier pair of the
+// round touched, so they still are as at the start of the round, and a
+// voxel map entry an earlier merge rewrote belongs to a taken cell either
+// way. Hence the same cells for any thread count.
 size_t IrgridBuilder::merge_cells() {
+  constexpr uint32_t kNone = UINT32_MAX;
   size_t merges = 0;
   std::vector<uint8_t> touched(cells_.size());
-  std::vector<uint32_t> merged_tris;
+  std::vector<uint32_t> partner(cells_.size());
   for (bool any = true; any;) {
     any = false;
     for (int a = 0; a < 3; ++a) {
       const int b = (a + 1) % 3, c = (a + 2) % 3;
+      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(cells_.size()), 1024),
+                        [&](const tbb::blocked_range<uint32_t>& range) {
+        std::vector<uint32_t> merged_tris;
+        for (uint32_t i = range.begin(); i != range.end(); ++i) {
+          partner[i] = kNone;
+          const BuildCell& A = cells_[i];
+          if (!A.alive || A.hi[a] >= g_.virt.res[a]) continue;
+          int32_t v[3] = {A.lo[0], A.lo[1], A.lo[2]};
+          v[a] = A.hi[a];
+          const uint32_t j = tree_cell_at(v);
+          const BuildCell& B = cells_[j];
+          if (B.lo[a] != A.hi[a] || B.lo[b] != A.lo[b] || B.hi[b] != A.hi[b] || B.lo[c] != A.lo[c] ||
+              B.hi[c] != A.hi[c])
+            continue;
+          merged_tris.clear();
+          std::set_union(A.tris.begin(), A.tris.end(), B.tris.begin(), B.tris.end(), std::back_inserter(merged_tris));
+          int32_t mhi[3] = {A.hi[0], A.hi[1], A.hi[2]};
+          mhi[a] = B.hi[a];
+          if (cost(A.lo, mhi, merged_tris.size()) > cost(A.lo, A.hi, A.tris.size()) + cost(B.lo, B.hi, B.tris.size()))
+            continue;
+          partner[i] = j;
+        }
+      });
       std::fill(touched.begin(), touched.end(), 0);
+      std::vector<uint32_t> merged_tris;
       for (uint32_t i = 0; i < cells_.size(); ++i) {
+        const uint32_t j = partner[i];
+        if (j == kNone || touched[i] || touched[j]) continue;
         BuildCell& A = cells_[i];
-        if (!A.alive || touched[i] || A.hi[a] >= g_.virt.res[a]) continue;
-        int32_t v[3] = {A.lo[0], A.lo[1], A.lo[2]};
-        v[a] = A.hi[a];
-        const uint32_t j = tree_cell_at(v);
         BuildCell& B = cells_[j];
-        if (touched[j] || B.lo[a] != A.hi[a] || B.lo[b] != A.lo[b] || B.hi[b] != A.hi[b] || B.lo[c] != A.lo[c] ||
-            B.hi[c] != A.hi[c])
-          continue;
         merged_tris.clear();
         std::set_union(A.tris.begin(), A.tris.end(), B.tris.begin(), B.tris.end(), std::back_inserter(merged_tris));
-        int32_t mhi[3] = {A.hi[0], A.hi[1], A.hi[2]};
-        mhi[a] = B.hi[a];
-        if (cost(A.lo, mhi, merged_tris.size()) > cost(A.lo, A.hi, A.tris.size()) + cost(B.lo, B.hi, B.tris.size()))
-          continue;
         for_each_leaf(B.lo, B.hi, [&](uint32_t& entry) { entry = i; });
-        A.hi[a] = A.exp_hi[a] = mhi[a];
+        A.hi[a] = A.exp_hi[a] = B.hi[a];
         A.tris.swap(merged_tris);
         B.alive = false;
         std::vector<uint32_t>().swap(B.tris);
@@ -347,11 +375,14 @@ size_t IrgridBuilder::merge_cells() {
 // region would otherwise creep over its tiny cells one at a time.
 constexpr int kExpandRounds = 3;
 
+// Each cell grows its own expanded box (exp_lo, exp_hi) and reads only the
+// other cells' merged boxes and lists, which this pass leaves unchanged: the
+// cells expand in parallel, with the same result for any thread count.
 size_t IrgridBuilder::expand_cells() {
-  size_t grown = 0;
-  for (uint32_t i = 0; i < cells_.size(); ++i) {
+  std::vector<uint8_t> grew(cells_.size(), 0);
+  tbb::parallel_for(uint32_t{0}, static_cast<uint32_t>(cells_.size()), [&](uint32_t i) {
     BuildCell& C = cells_[i];
-    if (!C.alive) continue;
+    if (!C.alive) return;
     bool cell_grew = false;
     for (int round = 0, any = 1; any && round < kExpandRounds; ++round) {
       any = 0;
@@ -384,8 +415,10 @@ size_t IrgridBuilder::expand_cells() {
         cell_grew = true;
       }
     }
-    grown += cell_grew;
-  }
+    grew[i] = cell_grew;
+  });
+  size_t grown = 0;
+  for (const uint8_t g : grew) grown += g;
   return grown;
 }
 
@@ -421,6 +454,38 @@ void IrgridBuilder::finish(BuildStats& stats) {
   for (uint32_t& e : tree_nodes_) renumber(e);
   flatten_voxel_map();
   add_occupancy_stats(stats, g_.cells.size(), nonempty, refs, max_per_cell, g_.tris.size());
+}
+
+// Leaf blocks (irgrid.h): each cell's record followed by its list as
+// kd_leaf_blocks(count) 4-wide blocks, cells in order, and the voxel map's
+// leaf entries rewritten from cell ids to record positions. The slabs
+// replace the cells, the ids and the triangle copies.
+void IrgridBuilder::make_leaf_blocks(const TriangleMesh& mesh) {
+  std::vector<uint64_t> at(g_.cells.size() + 1, 0);
+  for (size_t i = 0; i < g_.cells.size(); ++i) at[i + 1] = at[i] + Irgrid::slab_chunks(g_.cells[i].count);
+  if (at.back() >= kIrgridInnerNode) throw std::length_error("irgrid: more than 2^31 chunks of leaf blocks");
+  g_.slabs.resize(at.back());
+  tbb::parallel_for(size_t{0}, g_.cells.size(), [&](size_t i) {
+    IrgridCell c = g_.cells[i];
+    const uint32_t* ids = g_.refs.data() + c.begin;
+    IrgridChunk* slab = g_.slabs.data() + at[i];
+    c.begin = static_cast<uint32_t>(at[i] + 1);
+    new (slab) IrgridCell(c);
+    for (uint32_t k = 0; k < c.count; k += kKdBlockWidth) {
+      auto* blk = new (slab + 1 + (k / kKdBlockWidth) * kIrgridChunksPerBlock) KdTriangleBlock;
+      fill_block<kKdBlockWidth>(*blk, ids + k, static_cast<int>(std::min<uint32_t>(c.count - k, kKdBlockWidth)),
+                                [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+    }
+  });
+  auto to_slab = [&](uint32_t& e) {
+    if (!(e & kIrgridInnerNode)) e = static_cast<uint32_t>(at[e]);
+  };
+  for (uint32_t& e : g_.top_nodes) to_slab(e);
+  for (uint32_t& e : g_.nodes) to_slab(e);
+  std::vector<IrgridCell>().swap(g_.cells);
+  std::vector<uint32_t>().swap(g_.refs);
+  std::vector<LeafTriangle>().swap(g_.tris);
+  g_.leaf_blocks = true;
 }
 
 void IrgridBuilder::build(const TriangleMesh& mesh, BuildStats& stats) {
@@ -475,6 +540,7 @@ void IrgridBuilder::build(const TriangleMesh& mesh, BuildStats& stats) {
   stats.extra["merged_pairs"] = opt_.merge ? static_cast<double>(merge_cells()) : 0.0;
   stats.extra["expanded_cells"] = opt_.expand ? static_cast<double>(expand_cells()) : 0.0;
   finish(stats);
+  if (opt_.leaf_blocks) make_leaf_blocks(mesh);
   stats.extra["top_x"] = g_.top.res[0];
   stats.extra["top_y"] = g_.top.res[1];
   stats.extra["top_z"] = g_.top.res[2];

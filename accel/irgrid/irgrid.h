@@ -14,18 +14,43 @@
 // entries (child = the next k bits of x, y, z, most significant first). Merging rewrites the entries of the
 // merged cells; expansion only grows a cell's own box (`lo`/`hi`), so boxes
 // may overlap their neighbours while the map still names each voxel's owner.
+//
+// A cell's triangles are either ids into `refs` (scalar test, either
+// triangle test) or, with leaf blocks (simd=1, tri=watertight), the k-d
+// tree's 4-wide SIMD triangle blocks, stored with the cell: `slabs` holds
+// per cell its 32-byte record followed by its blocks, and the voxel map's
+// leaf entries name the record's position there. The walk then goes voxel
+// map -> cell record and blocks in consecutive cache lines (one stream the
+// walk can prefetch as soon as it knows the next cell), instead of map ->
+// cell -> id -> triangle; the block test gives the scalar test's hits bit
+// for bit (triangle_block.h).
+#include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda_grid.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
+// Everything one step of the walk reads, in one 32-byte record.
 struct IrgridCell {
   int32_t lo[3], hi[3];  // virtual voxels [lo, hi), the expanded box
-  uint32_t begin = 0, count = 0;  // triangles refs[begin, begin + count)
+  // count triangles: refs[begin, begin + count), or with leaf blocks the
+  // kd_leaf_blocks(count) blocks from blocks[begin].
+  uint32_t begin = 0, count = 0;
 };
+static_assert(sizeof(IrgridCell) == 32);
+
+// The unit of `slabs`: a cell record or a fifth of a 4-wide block.
+struct alignas(32) IrgridChunk {
+  std::byte bytes[32];
+};
+inline constexpr uint32_t kIrgridChunksPerBlock = sizeof(KdTriangleBlock) / sizeof(IrgridChunk);
+static_assert(sizeof(KdTriangleBlock) % sizeof(IrgridChunk) == 0 && alignof(KdTriangleBlock) <= alignof(IrgridChunk));
+static_assert(sizeof(IrgridCell) == sizeof(IrgridChunk));
 
 inline constexpr uint32_t kIrgridInnerNode = 0x80000000u;
 inline constexpr int kIrgridLevelsShift = 29;  // bits 29-30 of an inner entry: k
@@ -38,10 +63,35 @@ struct Irgrid {
   int depth = 0;    // log2 of the refinement: the deepest octree level allowed
   std::vector<uint32_t> top_nodes;  // per top cell: its root entry
   std::vector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
-  std::vector<IrgridCell> cells;
-  std::vector<uint32_t> refs;
-  std::vector<LeafTriangle> tris;
+  std::vector<IrgridCell> cells;    // empty with leaf blocks
+  std::vector<uint32_t> refs;       // empty with leaf blocks
+  std::vector<LeafTriangle> tris;   // empty with leaf blocks
+  // With leaf blocks: per cell its record, then kd_leaf_blocks(count) blocks;
+  // the voxel map's leaf entries are record positions (in chunks).
+  std::vector<IrgridChunk> slabs;
+  bool leaf_blocks = false;
   bool empty = true;
+
+  // The cell record and the blocks at slab position `at` (objects the
+  // builder created there with placement new).
+  const IrgridCell& slab_cell(uint32_t at) const {
+    return *std::launder(reinterpret_cast<const IrgridCell*>(slabs.data() + at));
+  }
+  const KdTriangleBlock* slab_blocks(uint32_t at) const {
+    return std::launder(reinterpret_cast<const KdTriangleBlock*>(slabs.data() + at + 1));
+  }
+  static uint32_t slab_chunks(uint32_t count) { return 1 + kd_leaf_blocks(count) * kIrgridChunksPerBlock; }
+
+  // Every cell in order (either layout).
+  template <typename F>
+  void for_each_cell(F&& f) const {
+    if (!leaf_blocks) {
+      for (const IrgridCell& c : cells) f(c);
+      return;
+    }
+    for (size_t at = 0; at < slabs.size(); at += slab_chunks(slab_cell(static_cast<uint32_t>(at)).count))
+      f(slab_cell(static_cast<uint32_t>(at)));
+  }
 
   // The deepest block a walk's last lookup went through. The next voxel of
   // a walk is a neighbour of the last, usually under the same block, so the
@@ -85,7 +135,8 @@ struct Irgrid {
 
   size_t bytes() const {
     return top_nodes.size() * sizeof(uint32_t) + nodes.size() * sizeof(uint32_t) +
-           cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle);
+           cells.size() * sizeof(IrgridCell) + refs.size() * sizeof(uint32_t) + tris.size() * sizeof(LeafTriangle) +
+           slabs.size() * sizeof(IrgridChunk);
   }
 };
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "accel/core/batch_accelerator.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/structure_info.h"
 #include "accel/core/triangle_test_param.h"
 #include "accel/irgrid/build_irgrid.h"
@@ -15,11 +16,16 @@ namespace {
 
 class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
  public:
-  IrgridAccel(const IrgridOptions& opt, TriangleTest test) : BatchAccelerator(test), opt_(opt) {}
+  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd) : BatchAccelerator(test), opt_(opt) {
+    opt_.leaf_blocks = leaf_blocks_wanted(simd, test);
+  }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_irgrid<kTest, kAnyHit, kCount>(grid_, ray, stats);
+    if constexpr (kTest == TriangleTest::Watertight) {
+      if (grid_.leaf_blocks) return traverse_irgrid<kTest, kAnyHit, kCount, true>(grid_, ray, stats);
+    }
+    return traverse_irgrid<kTest, kAnyHit, kCount, false>(grid_, ray, stats);
   }
 
   // Depth 0: the grid's box; depth 1: every cell's (expanded) box, filled
@@ -28,8 +34,10 @@ class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
     out.what = "cells (expanded boxes), occupied ones filled";
     if (grid_.empty) return;
     if (!out.add(OutlineBox{voxel_box(grid_.virt, 0, grid_.virt.res), 0, false}) || max_depth < 1) return;
-    for (const IrgridCell& c : grid_.cells)
-      if (!out.add(OutlineBox{voxel_box(grid_.virt, c.lo, c.hi), 1, c.count != 0})) return;
+    bool room = true;
+    grid_.for_each_cell([&](const IrgridCell& c) {
+      room = room && out.add(OutlineBox{voxel_box(grid_.virt, c.lo, c.hi), 1, c.count != 0});
+    });
   }
 
  protected:
@@ -61,7 +69,7 @@ AcceleratorInfo irgrid_accelerator_info() {
       "irregular grid (Perard-Gayot, Kalojanov & Slusallek 2017): top grid, octree-subdivided cells merged by "
       "expected cost and expanded over neighbours they contain, walked cell to cell through a voxel map",
       {{"top", "0.125", "top grid density lambda_1 (top cells ~ top x triangles), in (0, 64]", real_in(0, 64, Ends::OpenLow)},
-       {"sub", "0.5", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]",
+       {"sub", "0.125", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]",
         real_in(0, 1024, Ends::OpenLow)},
        {"step", "2",
         "cost of entering a cell in triangle tests, for the octree's split and the merge pass's cost model, in [0, 1000]",
@@ -69,7 +77,9 @@ AcceleratorInfo irgrid_accelerator_info() {
        {"depth", "12", "deepest octree level below a top cell, 0..16", integer_in(0, 16)},
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)",
         boolean_flag()},
-       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()}},
+       {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()},
+       {"simd", "1", "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)",
+        boolean_flag()}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
@@ -78,9 +88,10 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.max_depth = p.integer("depth");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
-        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p));
+        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), p.boolean("simd"));
       });
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0"};  // both off: tests/test_irgrid.cpp
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0"};  // both off: tests/test_irgrid.cpp
+  info.caps.scalar_variant = "simd=0";
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},
                 {"refs", "triangle references in cells"},

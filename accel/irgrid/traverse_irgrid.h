@@ -21,16 +21,26 @@
 // grid_ray_query.h). Expansion keeps this: a cell's box only grows over
 // voxels whose owners' triangles the cell lists (or that are empty), so all
 // triangles within the assignment margin of the walked path were tested.
+//
+// Triangle tests: every triangle of a visited cell, without a mailbox: a
+// triangle met again in a later cell is tested again, which cannot change
+// the recorder's hit (the same t and id; ties go to the lower id). With leaf
+// blocks (kBlocks, irgrid.h) `cur` is a cell's slab position and its
+// triangles are tested 4 at a time by the SIMD watertight test; simd=0 runs
+// the same walk with the scalar test, so both give the same hits and count
+// the same work (a mailbox cannot skip single lanes of a block).
 #include <cstdint>
 #include <limits>
 
+#include "accel/bvh/triangle_block.h"
 #include "accel/grid/grid_ray_query.h"
 #include "accel/irgrid/irgrid.h"
 
 namespace raylab {
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
 inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stats) {
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
   return walk_grid<kTest, kAnyHit, kCount>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1,
                                                                            auto& q) {
     int32_t v[3];
@@ -38,9 +48,18 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
+    BlockRay<kKdBlockWidth> block_ray;
+    if constexpr (kBlocks) block_ray.init(q.pre.w);
     Irgrid::LookupCache cache;
+    // Software pipelining: the walk is a chain of dependent loads (voxel
+    // map -> cell -> triangles), so each step first finds the *next* cell
+    // (it depends only on the current cell's box, not on its triangles) and
+    // only then tests the current cell's triangles: the next lookup's loads
+    // overlap the triangle tests instead of waiting behind them.
+    uint32_t cur = g.cell_at(v, cache);
     while (true) {
-      const IrgridCell& c = cells[g.cell_at(v, cache)];
+      // With blocks, `cur` is the cell's slab position (irgrid.h).
+      const IrgridCell& c = kBlocks ? g.slab_cell(cur) : cells[cur];
       q.rec.count_nodes(1);
       double t_exit = std::numeric_limits<double>::infinity();
       int exit_axis = -1;
@@ -52,19 +71,47 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
           exit_axis = a;
         }
       }
-      if (c.count != 0 && q.test_cell(refs + c.begin, c.count, tris)) return;  // any hit: found one
+      // The next voxel, then its cell (none past the ray's end or the grid).
+      bool last = !(t_exit < t1);
+      uint32_t next = 0;
+      if (!last) {
+        for (int a = 0; a < 3; ++a) {
+          if (a == exit_axis || dr.step[a] == 0) continue;
+          const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
+          if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
+          else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
+        }
+        v[exit_axis] = dr.step[exit_axis] > 0 ? c.hi[exit_axis] : c.lo[exit_axis] - 1;
+        last = static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis]);
+        if (!last) {
+          next = g.cell_at(v, cache);
+          if constexpr (kBlocks) {
+            // The record and the first block: 192 bytes from a 32-byte boundary.
+            const char* p = reinterpret_cast<const char*>(g.slabs.data() + next);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + 64);
+            __builtin_prefetch(p + 128);
+            __builtin_prefetch(p + 191);
+          } else {
+            __builtin_prefetch(cells + next);
+          }
+        }
+      }
+      if constexpr (kBlocks) {
+        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(g.slab_blocks(cur), kd_leaf_blocks(c.count), block_ray,
+                                                                 q.ray.tmin, q.rec)) {
+          if constexpr (kAnyHit) return;  // found one
+        }
+      } else {
+        if (c.count != 0 && intersect_leaf_indexed(q.pre, q.ray, tris, refs + c.begin, c.count, q.rec)) {
+          if constexpr (kAnyHit) return;  // found one
+        }
+      }
       if constexpr (!kAnyHit) {
         if (q.done_at(t_exit)) return;
       }
-      if (!(t_exit < t1)) return;
-      for (int a = 0; a < 3; ++a) {
-        if (a == exit_axis || dr.step[a] == 0) continue;
-        const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
-        if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
-        else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
-      }
-      v[exit_axis] = dr.step[exit_axis] > 0 ? c.hi[exit_axis] : c.lo[exit_axis] - 1;
-      if (static_cast<uint32_t>(v[exit_axis]) >= static_cast<uint32_t>(g.virt.res[exit_axis])) return;
+      if (last) return;
+      cur = next;
     }
   });
 }
