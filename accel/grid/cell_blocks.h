@@ -19,6 +19,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "base/triangle_mesh.h"
 
@@ -39,7 +40,7 @@ inline uint64_t blocks_of_runs(std::span<const uint32_t> offsets) {
 }
 
 struct CellBlocks {
-  std::vector<KdTriangleBlock> blocks;
+  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
   // block_at[p] for every run boundary p (a run's begin or end, refs.size()
   // included): the position of that run's first block (or of the end).
   std::vector<uint32_t> block_at;

@@ -16,6 +16,7 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
@@ -27,7 +28,7 @@ struct HashGrid {
   CellHashTable table;
   std::vector<uint32_t> refs;  // triangle ids, grouped by occupied cell
   std::vector<LeafTriangle> tris;
-  std::vector<KdTriangleBlock> blocks;
+  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
   bool empty = true;
 };
 

@@ -29,6 +29,7 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
@@ -60,7 +61,7 @@ struct TwoLevelGrid {
   std::vector<LeafTriangle> tris;
   // With SIMD blocks (options.leaf_blocks()) offsets, large_begin and
   // large_count count blocks, and refs and tris are empty.
-  std::vector<KdTriangleBlock> blocks;
+  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
   bool empty = true;
 };
 

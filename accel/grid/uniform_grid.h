@@ -9,6 +9,7 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
@@ -19,7 +20,7 @@ struct UniformGrid {
   // refs and tris are empty.
   CellLists lists;
   std::vector<LeafTriangle> tris;
-  std::vector<KdTriangleBlock> blocks;
+  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
   // With empty-space skipping (skip=1): per cell the distance to the nearest
   // occupied cell (cell_clearance.h).
   std::vector<uint8_t> clearance;

@@ -29,6 +29,7 @@
 #include <new>
 #include <vector>
 
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda_grid.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
@@ -61,14 +62,17 @@ struct Irgrid {
   DdaGrid top;      // the top grid
   DdaGrid virt;     // the virtual grid: top refined 2^depth per axis (same box)
   int depth = 0;    // log2 of the refinement: the deepest octree level allowed
-  std::vector<uint32_t> top_nodes;  // per top cell: its root entry
-  std::vector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
+  // The arrays the walk reads on huge pages (huge_page_allocator.h: the
+  // walk touches tens of megabytes, and with 4 KiB pages nearly every
+  // lookup would also miss the TLB).
+  HugePageVector<uint32_t> top_nodes;  // per top cell: its root entry
+  HugePageVector<uint32_t> nodes;      // blocks of (2^k)^3 child entries
   std::vector<IrgridCell> cells;    // empty with leaf blocks
   std::vector<uint32_t> refs;       // empty with leaf blocks
   std::vector<LeafTriangle> tris;   // empty with leaf blocks
   // With leaf blocks: per cell its record, then kd_leaf_blocks(count) blocks;
   // the voxel map's leaf entries are record positions (in chunks).
-  std::vector<IrgridChunk> slabs;
+  HugePageVector<IrgridChunk> slabs;
   bool leaf_blocks = false;
   bool empty = true;
 
