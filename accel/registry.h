@@ -63,6 +63,9 @@ struct AcceleratorInfo {
   // rss_before_build_bytes) and round up. 0 = not declared: bench assumes the
   // largest figure any structure declares.
   double build_peak_bytes_per_triangle = 0;
+  // The same for the scalar variant (caps.scalar_variant), when its layout
+  // is much smaller (the grids' ids against SIMD blocks); 0 = as above.
+  double scalar_build_peak_bytes_per_triangle = 0;
 };
 
 // A name no structure may take: tests use it as "an unknown accelerator"

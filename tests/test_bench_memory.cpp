@@ -48,6 +48,10 @@ TEST(MemoryEstimate, GrowsWithTrianglesAndKnowsEveryStructure) {
   }
   // 10^8 triangles of bvh need gigabytes, not megabytes.
   EXPECT_GT(estimate_build_peak_bytes("bvh", 100'000'000), size_t{4} << 30);
+  // A scalar variant with its own, smaller figure (the grids' ids against SIMD blocks).
+  EXPECT_LT(build_peak_bytes_per_triangle("grid:simd=0"), build_peak_bytes_per_triangle("grid"));
+  EXPECT_LT(build_peak_bytes_per_triangle("grid2:density=2,simd=0"), build_peak_bytes_per_triangle("grid2:density=2"));
+  EXPECT_EQ(build_peak_bytes_per_triangle("grid:simd=1"), build_peak_bytes_per_triangle("grid"));
 }
 
 BenchOptions tiny_options() {

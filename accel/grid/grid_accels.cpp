@@ -42,13 +42,14 @@ class GridAccel final : public BatchAccelerator<GridAccel<Grid, kBuild>> {
 
 template <typename Grid, Grid (*kBuild)(const TriangleMesh&, const GridOptions&, BuildStats&)>
 AcceleratorInfo grid_info(const char* name, const char* help, bool with_res, bool with_top,
-                          double build_peak_bytes_per_triangle) {
+                          double build_peak_bytes_per_triangle, double scalar_build_peak_bytes_per_triangle) {
   AcceleratorInfo info{name, help, grid_param_infos(with_res, with_top),
                        [with_res, with_top](const Params& p) -> std::unique_ptr<Accelerator> {
                          return std::make_unique<GridAccel<Grid, kBuild>>(parse_grid_options(p, with_res, with_top));
                        }};
   complete_grid_info(info);
   info.build_peak_bytes_per_triangle = build_peak_bytes_per_triangle;
+  info.scalar_build_peak_bytes_per_triangle = scalar_build_peak_bytes_per_triangle;
   return info;
 }
 
@@ -57,7 +58,7 @@ AcceleratorInfo grid_info(const char* name, const char* help, bool with_res, boo
 AcceleratorInfo grid_accelerator_info() {
   AcceleratorInfo info = grid_info<UniformGrid, build_uniform_grid>(
       "grid", "dense uniform grid, n^(1/3) rule, exact SAT assignment, 6-connected 3D-DDA (Amanatides & Woo 1987)",
-      true, false, 360);  // peak bytes per triangle: measured 357 on soup:n=10^6 (simd=0: 68 on soup:n=10^7)
+      true, false, 360, 75);  // peak bytes per triangle: measured 357 on soup:n=10^6 (simd=0: 68 on soup:n=10^7)
   // storage=implicit (accel/grid/implicit_grid.h): the same resolution and
   // DDA, cells found as the AND of per-slab bit arrays.
   info.params.push_back({"storage", "dense",
@@ -89,13 +90,13 @@ AcceleratorInfo grid_accelerator_info() {
 AcceleratorInfo hashgrid_accelerator_info() {
   return grid_info<HashGrid, build_hash_grid>(
       "hashgrid", "uniform grid storing only occupied cells in a hash table (open addressing), same 3D-DDA as grid",
-      true, false, 470);  // measured 461 on soup:n=10^6 (simd=0: 131 on soup:n=10^7)
+      true, false, 470, 140);  // measured 461 on soup:n=10^6 (simd=0: 131 on soup:n=10^7)
 }
 
 AcceleratorInfo grid2_accelerator_info() {
   return grid_info<TwoLevelGrid, build_two_level_grid>(
       "grid2", "two-level grid: coarse top grid, n^(1/3)-rule sub-grid per non-empty cell, nested 3D-DDA", false,
-      true, 560);  // measured 556 on soup:n=10^6 (simd=0: 145 on soup:n=10^7)
+      true, 560, 150);  // measured 556 on soup:n=10^6 (simd=0: 145 on soup:n=10^7)
 }
 
 }  // namespace raylab
