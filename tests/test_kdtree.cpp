@@ -783,9 +783,15 @@ TEST(KdTreeStats, BuildAndTraversalFiguresAreReported) {
   EXPECT_GT(clustered.stats.bytes, s.bytes);
   EXPECT_LT(clustered.stats.bytes, s.bytes + s.nodes * 8 / 4);
 
-  // The SAH tree is cheaper than the spatial median one by its own measure.
+  // The SAH tree is cheaper than the spatial median one by the reported
+  // measure (C_T = C_I = 1) when built with constants of that ratio (Wald &
+  // Havran's 15 and 20); the default ct=200 trades node steps for triangle
+  // tests in SIMD blocks, so by that measure it has fewer, larger leaves.
   const Built median = build("kdtree:builder=median", mesh);
-  EXPECT_LT(s.sah_cost, median.stats.sah_cost);
+  const Built published = build("kdtree:ct=15", mesh);
+  EXPECT_LT(published.stats.sah_cost, median.stats.sah_cost);
+  EXPECT_LT(s.nodes, published.stats.nodes / 4);
+  EXPECT_GT(s.extra.at("avg_leaf_size"), 4 * published.stats.extra.at("avg_leaf_size"));
 
   const auto rays = mixed_rays(mesh, 2000, 92);
   std::vector<Hit> hits(rays.size());
