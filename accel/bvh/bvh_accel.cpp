@@ -3,7 +3,7 @@
 // into:
 //
 //   builder=binned|sweep|sbvh|lbvh   opt=none|reinsert   layout=bvh2|bvh4|bvh8
-//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray packets)
+//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray frustum packets)
 //
 // Every combination reports the same statistics: build ms, bytes, nodes,
 // leaves, depth and SAH cost of the traced structure (constants in
@@ -59,7 +59,7 @@ struct BvhConfig {
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
-  int packet = 0;  // 16: closest-hit batches as 16-ray packets (traverse_packet.h); bvh8 only
+  int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 only
 };
 
 int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
@@ -110,6 +110,9 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
   WideKernel(WideBvh<N, W> bvh, bool packets)
       : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref, wide_fma_origin_limit(bvh_.root_box)};
+    // The packet walk pushes leaves as (parent node, slot) in a child reference.
+    if (packets_ && bvh_.nodes.size() > (wide_ref::kLeafBit >> 3))
+      throw std::runtime_error("bvh: too many nodes for packet=16");
   }
 
   // packet=16: uninstrumented closest-hit batches go through the packet
@@ -344,7 +347,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
        triangle_test_param("; mt with layout=bvh2 only"),
-       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)",
+       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches: 16 rays from one origin as one frustum, other rays singly)",
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
         one_of({"box", "sphere"})}},

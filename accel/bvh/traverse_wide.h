@@ -254,10 +254,12 @@ template <int N, int W>
 
 // The same for closest hit: two children are ordered by one comparison,
 // three or more sorted by distance (sort_network.h) and pushed so the
-// nearest is on top; returns the nearest.
-template <int N, int W>
-[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
-                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+// nearest is on top; returns the nearest. `refs` are the references pushed
+// (the node's children, or what the packet walk pushes in their place);
+// prefetch(slot) is called for every child pushed.
+template <int N, typename Prefetch>
+[[gnu::always_inline]] inline uint32_t push_by_distance(const uint32_t* refs, uint32_t mask, simd::vfloat<N> tnear,
+                                                        uint64_t* stack, int& sp, Prefetch&& prefetch) {
   alignas(64) float dist[N];
   tnear.store(dist);
   const uint32_t i0 = simd::ctz(mask);
@@ -265,9 +267,9 @@ template <int N, int W>
   const uint32_t i1 = simd::ctz(rest);
   if ((rest & (rest - 1)) == 0) {
     // Two children: order their keys with min/max (no branch to mispredict).
-    const uint64_t k0 = child_key(dist[i0], child[i0]);
-    const uint64_t k1 = child_key(dist[i1], child[i1]);
-    prefetch_child(bvh, key_ref(std::max(k0, k1)));
+    const uint64_t k0 = child_key(dist[i0], refs[i0]);
+    const uint64_t k1 = child_key(dist[i1], refs[i1]);
+    prefetch(k0 > k1 ? i0 : i1);
     stack[sp++] = std::max(k0, k1);
     return key_ref(std::min(k0, k1));
   }
@@ -279,12 +281,12 @@ template <int N, int W>
     // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
     const __m512i keys = _mm512_or_si512(
         _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
-        _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
+        _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(refs)),
                                                              _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
     __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
     sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
     _mm512_storeu_si512(stack + sp, sorted);
-    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
+    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
     sp += k - 1;
     return key_ref(stack[sp]);
   }
@@ -293,11 +295,17 @@ template <int N, int W>
   int n = 0;
   for (uint32_t m = mask; m != 0; m &= m - 1) {
     const uint32_t i = simd::ctz(m);
-    keys[n++] = child_key(dist[i], child[i]);
+    keys[n++] = child_key(dist[i], refs[i]);
   }
   sort8_keys_descending(keys, n);
   sp += k - 1;
   return key_ref(stack[sp]);
+}
+
+template <int N, int W>
+[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+  return push_by_distance<N>(child, mask, tnear, stack, sp, [&](uint32_t i) { prefetch_child(bvh, child[i]); });
 }
 
 // Counting (kCount): a node visited is a child box tested, so an inner node
