@@ -235,6 +235,50 @@ TEST(BvhFamily, RejectsBadParameters) {
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
 }
 
+TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
+  // simd=0 walks the same wide tree with scalar box and triangle tests: the
+  // same hits bit for bit, the same occlusion and the same counted work, for
+  // both wide layouts and for the rays that take the exact box test
+  // (axis-parallel, tmin < 0) as well as the FMA one. The registry-wide test
+  // (Registry.ScalarVariantGivesIdenticalHits) covers the default layout.
+  const test::NamedMesh s = test::soup(2500, 29);
+  std::vector<Ray> rays = test::camera_rays(s.mesh, 40, 30);
+  Pcg32 rng(3, 11);
+  const Aabb box = s.mesh.bounds();
+  for (int i = 0; i < 1500; ++i) {
+    const Vec3f u(rng.uniform(), rng.uniform(), rng.uniform());
+    rays.emplace_back(Vec3f(box.lo + u.cwiseProduct(box.hi - box.lo)), test::random_direction(rng));
+  }
+  for (size_t i = 3; i < rays.size(); i += 37) rays[i].dir.y() = 0.0f;  // axis-parallel component
+  for (size_t i = 7; i < rays.size(); i += 41) rays[i].tmin = -1.0f;     // tmin < 0
+  for (const char* layout : {"bvh8", "bvh4"}) {
+    auto simd = make_accelerator(fmt::format("bvh:layout={}", layout));
+    auto scalar = make_accelerator(fmt::format("bvh:layout={},simd=0", layout));
+    simd->build(s.mesh);
+    scalar->build(s.mesh);
+    std::vector<Hit> a(rays.size()), b(rays.size());
+    std::vector<uint8_t> oa(rays.size()), ob(rays.size());
+    TraversalStats sa, sb, soa, sob;
+    simd->intersect(rays, a, &sa);
+    scalar->intersect(rays, b, &sb);
+    simd->occluded(rays, oa, &soa);
+    scalar->occluded(rays, ob, &sob);
+    size_t hits = 0, bad = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits += a[i].valid();
+      bad += std::memcmp(&a[i], &b[i], sizeof(Hit)) != 0 || oa[i] != ob[i];
+    }
+    EXPECT_EQ(bad, 0u) << layout;
+    EXPECT_GT(hits, rays.size() / 4) << layout;
+    EXPECT_EQ(sa.nodes_visited, sb.nodes_visited) << layout;
+    EXPECT_EQ(sa.triangle_tests, sb.triangle_tests) << layout;
+    EXPECT_EQ(soa.nodes_visited, sob.nodes_visited) << layout;
+    EXPECT_EQ(soa.triangle_tests, sob.triangle_tests) << layout;
+  }
+  EXPECT_THROW(make_accelerator("bvh:simd=0,block=4"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:simd=0,packet=16"), SpecError);
+}
+
 TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {
   // 600 copies of one triangle plus 600 of another: identical centroids
   // force the median fallbacks; every copy must stay reachable.
