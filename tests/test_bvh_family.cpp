@@ -765,6 +765,21 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
     for (size_t i = 9; i < rays.size(); i += 89) rays[i].dir.x() = 0.0f;          // axis-parallel component
     for (size_t i = 13; i < rays.size(); i += 83) rays[i].tmin = -1.0f;           // tmin < 0
     for (size_t i = 21; i < rays.size(); i += 79) rays[i].tmax = 0.5f;            // short
+    // Packets whose rays differ in the watertight test's dominant axis: 16
+    // rays from one point near the mesh centre, directions spread around a
+    // diagonal within one octant.
+    // (In front, so that they fill whole 16-ray chunks.)
+    Pcg32 rng(9, 4);
+    std::vector<Ray> fan;
+    for (int p = 0; p < 40; ++p) {
+      const Vec3f sign(p & 1 ? -1.0f : 1.0f, p & 2 ? -1.0f : 1.0f, p & 4 ? -1.0f : 1.0f);
+      const Vec3f org = s.mesh.bounds().center() + 0.1f * test::random_direction(rng);
+      for (int i = 0; i < 16; ++i) {
+        const Vec3f d(0.6f + 0.8f * rng.uniform(), 0.6f + 0.8f * rng.uniform(), 0.6f + 0.8f * rng.uniform());
+        fan.emplace_back(org, d.cwiseProduct(sign));
+      }
+    }
+    rays.insert(rays.begin(), fan.begin(), fan.end());
     const std::pair<const char*, const char*> pairs[] = {
         {"bvh", "bvh:packet=16"},
         {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},

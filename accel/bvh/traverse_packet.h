@@ -10,11 +10,10 @@
 // single-ray test, lane by lane), and the rays that pass test the leaf's
 // triangles one triangle at a time, 16 rays per vector.
 //
-// Only 16-ray chunks whose rays share one origin, one direction octant and
-// one axis permutation of the watertight test form a packet (pinhole camera
-// rays); everything else is traced by the single-ray kernel (Benthin, Wald,
-// Woop, Ernst and Mark, HPG 2012, combine packets and single rays the same
-// way). Rays the fast kernel does not take (invalid, nearly axis-parallel,
+// Only 16-ray chunks whose rays share one origin and one direction octant
+// form a packet (pinhole camera rays); everything else is traced by the
+// single-ray kernel (Benthin, Wald, Woop, Ernst and Mark, HPG 2012, combine
+// packets and single rays the same way). Rays the fast kernel does not take (invalid, nearly axis-parallel,
 // tmin < 0, origin far outside the scene) are traced singly. Rays from many
 // points (shadow rays of a camera's hits) were measured slower as packets
 // than as single rays (docs/bvh-speed.md), so diffuse, shadow and random
@@ -86,41 +85,38 @@ struct PacketInput {
     }
   }
 
-  // True when the rays form a packet: one origin, one direction octant, one
-  // dominant axis of the watertight test, and each ray one the fast
-  // single-ray kernel takes (valid, not nearly axis-parallel, tmin >= 0,
-  // origin within fma_origin_limit: see traverse_wide), lane by lane.
+  // True when the rays form a packet: one origin, one direction octant, and
+  // each ray one the fast single-ray kernel takes (valid, not nearly
+  // axis-parallel, tmin >= 0, origin within fma_origin_limit: see
+  // traverse_wide), lane by lane.
   bool coherent(float fma_origin_limit) const {
     using V = simd::vfloat<kPacketSize>;
     constexpr uint32_t kAll = (1u << kPacketSize) - 1u;
     const V zero = V::broadcast(0.0f), sign = V::broadcast(-0.0f);
     bool ok = true;
-    V mag[3];
     for (int a = 0; a < 3; ++a) {
       const float o = org[a][0];
       ok &= (o - o == 0.0f) & !(std::fabs(o) > fma_origin_limit);  // finite, near enough
       ok &= cmp_eq(V::load(org[a]), V::broadcast(o)) == kAll;
       const V d = V::load(dir[a]);
-      mag[a] = andnot(sign, d);
-      ok &= cmp_ge(mag[a], V::broadcast(1e-30f)) == kAll;  // not (nearly) axis-parallel, not NaN
+      ok &= cmp_ge(andnot(sign, d), V::broadcast(1e-30f)) == kAll;  // not (nearly) axis-parallel, not NaN
       ok &= cmp_eq(d - d, zero) == kAll;                    // finite
       const uint32_t neg = cmp_lt(d, zero);
       ok &= neg == 0 || neg == kAll;  // one octant
     }
     const V t0 = V::load(tmin);
     ok &= (cmp_ge(t0, zero) & cmp_le(t0, V::load(tmax))) == kAll;
-    // One dominant axis: the comparisons that choose it agree in all lanes.
-    for (const uint32_t m : {cmp_ge(mag[0], mag[1]), cmp_ge(mag[0], mag[2]), cmp_ge(mag[1], mag[2])})
-      ok &= m == 0 || m == kAll;
     return ok;
   }
 };
 
-// Per-ray constants of a packet, one lane per ray (lanes without a ray repeat
-// a member): the single-ray box test's reciprocals and plane shifts (the
-// values init_node_ray computes, in vector form), and the watertight test's
-// shear (WatertightRay, for the packet's common axis permutation kx, ky, kz).
-// Vector division is correctly rounded, so every value equals the scalar one.
+// Per-ray constants of a packet, one lane per ray: the single-ray box test's
+// reciprocals and plane shifts (the values init_node_ray computes, in vector
+// form), and the watertight test's shear (WatertightRay). The shear's axis
+// permutation follows the ray's dominant axis kz (kx, ky then follow from kz
+// and the packet's octant), so the lanes fall into up to three groups, each
+// tested with its own permutation (lanes_of_kz). Vector division is correctly
+// rounded, so every value equals the scalar one.
 struct PacketRays {
   using V = simd::vfloat<kPacketSize>;
   V inv[3], near_shift[3], far_shift[3];
@@ -128,7 +124,8 @@ struct PacketRays {
   alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize], tmin_lane[kPacketSize];
   float org[3];
   int near_row[3], far_row[3];  // rows of WideNode::bounds: the octant's near / far plane per axis
-  int kx = 0, ky = 1, kz = 2;
+  uint32_t lanes_of_kz[3];       // the lanes whose dominant axis is kz
+  int axes[3][3];                // for each kz: the permuted axes kx, ky, kz
 };
 
 // The packet's frustum in interval form (Wald, Boulos and Shirley 2007):
@@ -244,15 +241,30 @@ inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr
     fr.far_off[a] = pr.far_row[a] * N;
   }
   fr.tmin = V8::broadcast(lanes_min(tmin));
-  // The watertight shear, as WatertightRay (the packet shares kz).
-  pr.kz = dominant_axis(Vec3f(in.dir[0][0], in.dir[1][0], in.dir[2][0]));
-  pr.kx = (pr.kz + 1) % 3;
-  pr.ky = (pr.kx + 1) % 3;
-  if (((octant >> pr.kz) & 1) != 0) std::swap(pr.kx, pr.ky);
-  const V dz = V::load(in.dir[pr.kz]);
-  (V::load(in.dir[pr.kx]) / dz).store(pr.sx);
-  (V::load(in.dir[pr.ky]) / dz).store(pr.sy);
-  (one / dz).store(pr.sz);
+  // The watertight shear, as WatertightRay, for each dominant axis present.
+  const V sign = V::broadcast(-0.0f);
+  const V ax = andnot(sign, V::load(in.dir[0])), ay = andnot(sign, V::load(in.dir[1])),
+          az = andnot(sign, V::load(in.dir[2]));
+  const uint32_t x_ge_y = cmp_ge(ax, ay), x_ge_z = cmp_ge(ax, az), y_ge_z = cmp_ge(ay, az);
+  pr.lanes_of_kz[0] = x_ge_y & x_ge_z;
+  pr.lanes_of_kz[1] = ~x_ge_y & y_ge_z & 0xFFFFu;
+  pr.lanes_of_kz[2] = ~(pr.lanes_of_kz[0] | pr.lanes_of_kz[1]) & 0xFFFFu;
+  for (int kz = 0; kz < 3; ++kz) {
+    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+    if (((octant >> kz) & 1) != 0) std::swap(kx, ky);  // keep the winding, as WatertightRay
+    pr.axes[kz][0] = kx, pr.axes[kz][1] = ky, pr.axes[kz][2] = kz;
+    const uint32_t lanes = pr.lanes_of_kz[kz];
+    if (lanes == 0) continue;
+    const V dz = V::load(in.dir[kz]);
+    alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize];
+    (V::load(in.dir[kx]) / dz).store(sx);
+    (V::load(in.dir[ky]) / dz).store(sy);
+    (one / dz).store(sz);
+    for (uint32_t m = lanes; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      pr.sx[i] = sx[i], pr.sy[i] = sy[i], pr.sz[i] = sz[i];
+    }
+  }
 }
 
 // The 8 child boxes against the frustum: the mask of children some ray may
@@ -396,18 +408,21 @@ class PacketTracer {
   static void intersect_leaf(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
                              uint32_t active, PacketHits& ph) {
     HitLanes<L> h(ph, first);
-    for (uint32_t b = 0; b < nblocks; ++b) intersect_block_packet<L>(blocks[b], r, first, active, h);
+    for (int kz = 0; kz < 3; ++kz) {
+      const uint32_t lanes = active & (r.lanes_of_kz[kz] >> first);
+      if (lanes == 0) continue;
+      for (uint32_t b = 0; b < nblocks; ++b) intersect_block_packet<L>(blocks[b], r, r.axes[kz], first, lanes, h);
+    }
     h.store(ph, first);
   }
 
   template <int L>
-  static void intersect_block_packet(const TriangleBlock<W>& blk, const PacketRays& r, int first, uint32_t active,
-                                     HitLanes<L>& h) {
+  static void intersect_block_packet(const TriangleBlock<W>& blk, const PacketRays& r, const int* axis, int first,
+                                     uint32_t active, HitLanes<L>& h) {
     using VL = simd::vfloat<L>;
     using VW = simd::vfloat<W>;
-    // Translated vertices: rel[corner][k][lane], k = 0, 1, 2 for kx, ky, kz.
+    // Translated vertices: rel[corner][k][lane], k = 0, 1, 2 for kx, ky, kz (axis[k]).
     alignas(64) float rel[3][3][W];
-    const int axis[3] = {r.kx, r.ky, r.kz};
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < 3; ++k)
         (VW::load(blk.v[c][axis[k]]) - VW::broadcast(r.org[axis[k]])).store(rel[c][k]);
