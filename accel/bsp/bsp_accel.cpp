@@ -40,7 +40,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
     BspTree tree = build_bsp(mesh, opt_, &bs);
     BspPackedTree packed = pack_bsp_nodes(tree.nodes);
     tree.nodes = {};
-    nodes_ = std::move(packed.nodes);
+    nodes_.assign(packed.nodes.begin(), packed.nodes.end());
     planes_ = std::move(packed.planes);
     tris_.clear();
     ids_.clear();
@@ -111,11 +111,11 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
   }
 
   BspDirectionTable directions_;
-  std::vector<BspPackedNode> nodes_;
+  HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
   std::vector<BspPlane> planes_;
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
-  std::vector<KdTriangleBlock> blocks_;  // C++17 aligned new honours the 32-byte alignment
+  HugePageVector<KdTriangleBlock> blocks_;
 };
 
 }  // namespace
