@@ -26,16 +26,21 @@ using KdTriangleBlock = TriangleBlock<kKdBlockWidth>;
 
 inline uint32_t kd_leaf_blocks(uint32_t count) { return (count + kKdBlockWidth - 1) / kKdBlockWidth; }
 
+// Writes the kd_leaf_blocks(count) blocks of one leaf (its `count`
+// triangle ids) to out[0..); shared with the grids' cells (accel/grid).
+inline void fill_kd_leaf_blocks(const TriangleMesh& mesh, const uint32_t* ids, uint32_t count, KdTriangleBlock* out) {
+  for (uint32_t i = 0; i < count; i += kKdBlockWidth)
+    fill_block<kKdBlockWidth>(*out++, ids + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
+                              [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+}
+
 // Appends the blocks of one leaf (its `count` triangle ids) and returns the
 // index of its first block; shared with the BSP tree's leaves (accel/bsp).
 inline uint32_t append_kd_leaf_blocks(const TriangleMesh& mesh, const uint32_t* ids, uint32_t count,
                                       HugePageVector<KdTriangleBlock>& blocks) {
   const uint32_t begin = static_cast<uint32_t>(blocks.size());
-  for (uint32_t i = 0; i < count; i += kKdBlockWidth) {
-    blocks.emplace_back();
-    fill_block<kKdBlockWidth>(blocks.back(), ids + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
-                              [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
-  }
+  blocks.resize(blocks.size() + kd_leaf_blocks(count));
+  fill_kd_leaf_blocks(mesh, ids, count, blocks.data() + begin);
   return begin;
 }
 
