@@ -241,6 +241,93 @@ nlohmann::json bench_report_header(const BenchCli& o, const std::vector<std::str
   return header;
 }
 
+// What a bench run has produced so far: its records and skips, written to
+// the JSON and CSV files after every cell (an interrupted run keeps them).
+struct BenchOutput {
+  std::string json_path, csv_path;
+  nlohmann::json header;
+  std::vector<BenchRecord> records;
+  std::vector<BenchSkip> skipped;
+
+  void save(bool complete) const {
+    if (!json_path.empty()) {
+      nlohmann::json recs = nlohmann::json::array();
+      for (const auto& r : records) recs.push_back(r.to_json());
+      nlohmann::json h = header;
+      h["complete"] = complete;
+      h["skipped"] = nlohmann::json::array();
+      for (const auto& s : skipped) h["skipped"].push_back(s.to_json());
+      write_json_report(json_path, h, recs);
+    }
+    if (!csv_path.empty()) write_file_atomically(csv_path, bench_csv(records));
+  }
+};
+
+// Where a scene's cells stand, for the progress line and the per-cell lines.
+struct SceneProgress {
+  size_t scene_index = 0, scenes = 0, cells = 0, done = 0;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+  std::string prefix() const {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const std::string eta =
+        done > 0 && cells > done ? fmt::format(", ~{} left in this scene", format_duration(elapsed / done * (cells - done)))
+                                 : std::string();
+    return fmt::format("[scene {}/{}, cell {}/{}, {}{}]", scene_index + 1, scenes, done + 1, cells,
+                       format_duration(elapsed), eta);
+  }
+};
+
+// Times every structure on one scene, appending its records and skips to out.
+void bench_scene(const std::string& spec, const std::vector<std::string>& specs, const BenchOptions& bo,
+                 SceneProgress sp, bool show, BenchOutput& out) {
+  const bool tty = show && isatty(fileno(stderr));
+  if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
+  const Scene scene = load_scene(spec);
+  const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
+  sp.cells = cell_specs.size() * bo.ray_sets.size() * bo.threads.size();
+  if (show && cell_specs.size() < specs.size())
+    std::fprintf(stderr, "%sbench: %s: brute skipped (%zu triangles > --brute-max-tris %zu)\n", tty ? "\r\033[K" : "",
+                 scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
+  BenchProgress progress;
+  if (tty)
+    progress = [&](const std::string& m) {
+      std::fprintf(stderr, "\r\033[K%s %s", sp.prefix().c_str(), m.c_str());
+      std::fflush(stderr);
+    };
+  std::set<std::string> noted;
+  const size_t primary_rays = static_cast<size_t>(bo.width) * bo.height;
+  const auto on_record = [&](const BenchRecord& r) {
+    ++sp.done;
+    out.records.push_back(r);
+    out.save(false);
+    const size_t asked = r.ray_set == "random" ? bo.random_rays : primary_rays;
+    if (show && r.rays != asked && noted.insert(r.ray_set).second)
+      std::fprintf(stderr, "%s%s: %s", tty ? "\r\033[K" : "", r.scene.c_str(),
+                   ray_set_size_note(r.ray_set, asked, r.rays).c_str());
+    if (show && !tty)
+      std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
+                   sp.scene_index + 1, sp.scenes, sp.done, sp.cells, r.scene.c_str(), r.accel.c_str(),
+                   r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
+  };
+  const auto on_skip = [&](const BenchSkip& skip) {
+    out.skipped.push_back(skip);
+    out.save(false);
+    std::printf("bench %s: %s skipped: %s\n", skip.scene.c_str(), skip.accel.c_str(), skip.reason.c_str());
+  };
+  const auto records = run_bench(scene, specs, bo, progress, on_record, on_skip);
+  // The returned records carry the best-Embree figures of the whole run.
+  if (out.records.size() >= records.size()) {
+    std::copy(records.begin(), records.end(), out.records.end() - static_cast<std::ptrdiff_t>(records.size()));
+    out.save(false);
+  }
+  if (tty) std::fprintf(stderr, "\r\033[K");
+  std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
+              format_bench_table(records).c_str());
+  std::printf("%s", format_build_summary(records).c_str());
+  std::fflush(stdout);
+}
+
 int run_bench_command(BenchCli& o, const CLI::App& cmd) {
   apply_preset(o, cmd);
   const std::vector<std::string> specs = accel_specs_of(o);
@@ -256,85 +343,23 @@ int run_bench_command(BenchCli& o, const CLI::App& cmd) {
   if (o.selfcheck) return run_embree_selfcheck(o, scene_specs, file_sets);
 
   BenchOptions bo = bench_options_of(o, file_sets);
-  const std::string csv = !o.csv.empty() ? o.csv : (o.json.empty() ? std::string() : csv_path_for(o.json));
-  const nlohmann::json header = bench_report_header(o, scene_specs, specs, bo);
-  std::vector<BenchRecord> all;
-  std::vector<BenchSkip> skipped;
-  auto save = [&](bool complete) {
-    if (!o.json.empty()) {
-      nlohmann::json recs = nlohmann::json::array();
-      for (const auto& r : all) recs.push_back(r.to_json());
-      nlohmann::json h = header;
-      h["complete"] = complete;
-      h["skipped"] = nlohmann::json::array();
-      for (const auto& s : skipped) h["skipped"].push_back(s.to_json());
-      write_json_report(o.json, h, recs);
-    }
-    if (!csv.empty()) write_file_atomically(csv, bench_csv(all));
-  };
+  BenchOutput out;
+  out.json_path = o.json;
+  out.csv_path = !o.csv.empty() ? o.csv : (o.json.empty() ? std::string() : csv_path_for(o.json));
+  out.header = bench_report_header(o, scene_specs, specs, bo);
 
-  const bool show = !o.quiet;
-  const bool tty = show && isatty(fileno(stderr));
   InterruptGuard interrupt;  // Ctrl-C: finish the current cell, keep the records
   bo.stop = interrupt.flag();
-  size_t done_scenes = 0;
-  for (const auto& spec : scene_specs) {
-    if (interrupt.interrupted()) break;
-    if (tty) std::fprintf(stderr, "\r\033[Kloading %s", spec.c_str());
-    const Scene scene = load_scene(spec);
-    const auto cell_specs = bench_specs_for_scene(specs, scene.num_triangles(), bo);
-    const size_t cells = cell_specs.size() * bo.ray_sets.size() * bo.threads.size();
-    if (show && cell_specs.size() < specs.size())
-      std::fprintf(stderr, "%sbench: %s: brute skipped (%zu triangles > --brute-max-tris %zu)\n", tty ? "\r\033[K" : "",
-                   scene.name.c_str(), scene.num_triangles(), bo.brute_max_triangles);
-    size_t done = 0;
-    BenchProgress progress;
-    const auto scene_start = std::chrono::steady_clock::now();
-    if (tty)
-      progress = [&](const std::string& m) {
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - scene_start).count();
-        const std::string eta =
-            done > 0 && cells > done ? fmt::format(", ~{} left in this scene", format_duration(elapsed / done * (cells - done)))
-                                     : std::string();
-        std::fprintf(stderr, "\r\033[K[scene %zu/%zu, cell %zu/%zu, %s%s] %s", done_scenes + 1, scene_specs.size(),
-                     done + 1, cells, format_duration(elapsed).c_str(), eta.c_str(), m.c_str());
-        std::fflush(stderr);
-      };
-    std::set<std::string> noted;
-    const size_t primary_rays = static_cast<size_t>(bo.width) * bo.height;
-    const auto records = run_bench(scene, specs, bo, progress, [&](const BenchRecord& r) {
-      ++done;
-      all.push_back(r);
-      save(false);
-      const size_t asked = r.ray_set == "random" ? bo.random_rays : primary_rays;
-      if (show && r.rays != asked && noted.insert(r.ray_set).second)
-        std::fprintf(stderr, "%s%s: %s", tty ? "\r\033[K" : "", r.scene.c_str(),
-                     ray_set_size_note(r.ray_set, asked, r.rays).c_str());
-      if (show && !tty)
-        std::fprintf(stderr, "bench [scene %zu/%zu, cell %zu/%zu] %s %s %s t=%d: %.2f Mrays/s, %.3f x embree\n",
-                     done_scenes + 1, scene_specs.size(), done, cells, r.scene.c_str(), r.accel.c_str(),
-                     r.ray_set.c_str(), r.threads, r.mrays_per_s, r.ratio_to_embree);
-    }, [&](const BenchSkip& skip) {
-      skipped.push_back(skip);
-      save(false);
-      std::printf("bench %s: %s skipped: %s\n", skip.scene.c_str(), skip.accel.c_str(), skip.reason.c_str());
-    });
-    // The returned records carry the best-Embree figures of the whole run.
-    if (all.size() >= records.size()) {
-      std::copy(records.begin(), records.end(), all.end() - static_cast<std::ptrdiff_t>(records.size()));
-      save(false);
-    }
-    if (tty) std::fprintf(stderr, "\r\033[K");
-    std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
-                format_bench_table(records).c_str());
-    std::printf("%s", format_build_summary(records).c_str());
-    std::fflush(stdout);
-    ++done_scenes;
+  for (size_t i = 0; i < scene_specs.size() && !interrupt.interrupted(); ++i) {
+    SceneProgress sp;
+    sp.scene_index = i;
+    sp.scenes = scene_specs.size();
+    bench_scene(scene_specs[i], specs, bo, sp, !o.quiet, out);
   }
   const bool interrupted = interrupt.interrupted();
-  save(!interrupted);
+  out.save(!interrupted);
   if (interrupted) {
-    std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", all.size(),
+    std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", out.records.size(),
                  o.json.empty() ? "" : " in ", o.json.c_str());
     return kExitInterrupted;
   }

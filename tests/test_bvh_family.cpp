@@ -23,6 +23,7 @@
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/sort_network.h"
+#include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/registry.h"
 #include "tests/accel_test_util.h"
@@ -232,6 +233,50 @@ TEST(BvhFamily, RejectsBadParameters) {
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
+}
+
+TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
+  // simd=0 walks the same wide tree with scalar box and triangle tests: the
+  // same hits bit for bit, the same occlusion and the same counted work, for
+  // both wide layouts and for the rays that take the exact box test
+  // (axis-parallel, tmin < 0) as well as the FMA one. The registry-wide test
+  // (Registry.ScalarVariantGivesIdenticalHits) covers the default layout.
+  const test::NamedMesh s = test::soup(2500, 29);
+  std::vector<Ray> rays = test::camera_rays(s.mesh, 40, 30);
+  Pcg32 rng(3, 11);
+  const Aabb box = s.mesh.bounds();
+  for (int i = 0; i < 1500; ++i) {
+    const Vec3f u(rng.uniform(), rng.uniform(), rng.uniform());
+    rays.emplace_back(Vec3f(box.lo + u.cwiseProduct(box.hi - box.lo)), test::random_direction(rng));
+  }
+  for (size_t i = 3; i < rays.size(); i += 37) rays[i].dir.y() = 0.0f;  // axis-parallel component
+  for (size_t i = 7; i < rays.size(); i += 41) rays[i].tmin = -1.0f;     // tmin < 0
+  for (const char* layout : {"bvh8", "bvh4"}) {
+    auto simd = make_accelerator(fmt::format("bvh:layout={}", layout));
+    auto scalar = make_accelerator(fmt::format("bvh:layout={},simd=0", layout));
+    simd->build(s.mesh);
+    scalar->build(s.mesh);
+    std::vector<Hit> a(rays.size()), b(rays.size());
+    std::vector<uint8_t> oa(rays.size()), ob(rays.size());
+    TraversalStats sa, sb, soa, sob;
+    simd->intersect(rays, a, &sa);
+    scalar->intersect(rays, b, &sb);
+    simd->occluded(rays, oa, &soa);
+    scalar->occluded(rays, ob, &sob);
+    size_t hits = 0, bad = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits += a[i].valid();
+      bad += std::memcmp(&a[i], &b[i], sizeof(Hit)) != 0 || oa[i] != ob[i];
+    }
+    EXPECT_EQ(bad, 0u) << layout;
+    EXPECT_GT(hits, rays.size() / 4) << layout;
+    EXPECT_EQ(sa.nodes_visited, sb.nodes_visited) << layout;
+    EXPECT_EQ(sa.triangle_tests, sb.triangle_tests) << layout;
+    EXPECT_EQ(soa.nodes_visited, sob.nodes_visited) << layout;
+    EXPECT_EQ(soa.triangle_tests, sob.triangle_tests) << layout;
+  }
+  EXPECT_THROW(make_accelerator("bvh:simd=0,block=4"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:simd=0,packet=16"), SpecError);
 }
 
 TEST(BvhFamily, CoincidentTrianglesEveryBuilder) {
@@ -720,6 +765,21 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
     for (size_t i = 9; i < rays.size(); i += 89) rays[i].dir.x() = 0.0f;          // axis-parallel component
     for (size_t i = 13; i < rays.size(); i += 83) rays[i].tmin = -1.0f;           // tmin < 0
     for (size_t i = 21; i < rays.size(); i += 79) rays[i].tmax = 0.5f;            // short
+    // Packets whose rays differ in the watertight test's dominant axis: 16
+    // rays from one point near the mesh centre, directions spread around a
+    // diagonal within one octant.
+    // (In front, so that they fill whole 16-ray chunks.)
+    Pcg32 rng(9, 4);
+    std::vector<Ray> fan;
+    for (int p = 0; p < 40; ++p) {
+      const Vec3f sign(p & 1 ? -1.0f : 1.0f, p & 2 ? -1.0f : 1.0f, p & 4 ? -1.0f : 1.0f);
+      const Vec3f org = s.mesh.bounds().center() + 0.1f * test::random_direction(rng);
+      for (int i = 0; i < 16; ++i) {
+        const Vec3f d(0.6f + 0.8f * rng.uniform(), 0.6f + 0.8f * rng.uniform(), 0.6f + 0.8f * rng.uniform());
+        fan.emplace_back(org, d.cwiseProduct(sign));
+      }
+    }
+    rays.insert(rays.begin(), fan.begin(), fan.end());
     const std::pair<const char*, const char*> pairs[] = {
         {"bvh", "bvh:packet=16"},
         {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},
@@ -754,6 +814,72 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
       EXPECT_EQ(occ_bad, 0u) << spec << " occlusion on " << s.name;
     }
   }
+}
+
+TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
+  // Random 16-ray packets (one origin, directions spread over a cone, some
+  // rays short) against random 8-box nodes: the frustum test keeps every box
+  // some ray's own single-ray test enters, with an entry distance no larger
+  // than that ray's; and the per-lane leaf test is each ray's own test, bit
+  // for bit. The frustum must also cull: a test that keeps every box would
+  // pass the first check vacuously.
+  Pcg32 rng(2024, 5);
+  auto uniform = [&](float lo, float hi) { return lo + (hi - lo) * rng.uniform(); };
+  size_t packets = 0, frustum_culled = 0, kept_by_rays = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const float spread = trial % 3 == 0 ? 0.3f : 0.02f;
+    const Vec3f org = Vec3f(uniform(-2, 2), uniform(-2, 2), uniform(-2, 2)) + (trial % 7 == 0 ? Vec3f(300, 0, 0) : Vec3f::Zero());
+    const Vec3f base = test::random_direction(rng);
+    std::vector<Ray> rays(kPacketSize);
+    for (Ray& r : rays) {
+      r = Ray(org, (base + spread * test::random_direction(rng)).normalized());
+      if (rng.uniform() < 0.2f) r.tmax = uniform(0.1f, 4.0f);
+      if (rng.uniform() < 0.1f) r.tmin = uniform(0.0f, 0.5f);
+    }
+    const PacketInput in(rays);
+    if (!in.coherent(FLT_MAX)) continue;
+    ++packets;
+    PacketRays pr;
+    PacketFrustum fr;
+    PacketHits ph;
+    make_packet(in, pr, fr, ph);
+    WideNode<8> node{};
+    for (int c = 0; c < 8; ++c) {
+      // Boxes near the packet's path (so that rays hit some), corner a.
+      const Vec3f a = org + uniform(-0.5f, 5.0f) * base + Vec3f(uniform(-1, 0.5f), uniform(-1, 0.5f), uniform(-1, 0.5f));
+      Vec3f e(uniform(0, 1.5f), uniform(0, 1.5f), uniform(0, 1.5f));
+      if (c == 5) e.y() = 0.0f;  // a flat box
+      for (int ax = 0; ax < 3; ++ax) node.bounds[2 * ax][c] = a[ax], node.bounds[2 * ax + 1][c] = a[ax] + e[ax];
+      node.child[c] = c;
+    }
+    using V8 = simd::vfloat<8>;
+    V8 ftnear;
+    const uint32_t fmask = frustum_children(node, fr, V8::broadcast(ph.greatest_t()), ftnear);
+    alignas(32) float fnear[8];
+    ftnear.store(fnear);
+    frustum_culled += 8 - simd::popcount(fmask);
+    uint32_t lanes_of_slot[8] = {};
+    for (int c = 0; c < 8; ++c) lanes_of_slot[c] = rays_entering(node, c, pr, simd::vfloat<kPacketSize>::load(ph.t));
+    for (int i = 0; i < kPacketSize; ++i) {
+      WideNodeRay<8> nr;
+      init_node_ray(nr, rays[i], false);
+      V8 tnear;
+      const uint32_t m = intersect_children<8, false>(node, nr, V8::broadcast(rays[i].tmin), V8::broadcast(rays[i].tmax), tnear);
+      alignas(32) float near[8];
+      tnear.store(near);
+      kept_by_rays += simd::popcount(m);
+      EXPECT_EQ(m & ~fmask, 0u) << "trial " << trial << " ray " << i;
+      for (int c = 0; c < 8; ++c) {
+        if ((m >> c) & 1u) {
+          EXPECT_LE(fnear[c], near[c]) << "trial " << trial << " ray " << i << " slot " << c;
+        }
+        EXPECT_EQ((lanes_of_slot[c] >> i) & 1u, (m >> c) & 1u) << "trial " << trial << " ray " << i << " slot " << c;
+      }
+    }
+  }
+  EXPECT_GT(packets, 1000u);
+  EXPECT_GT(kept_by_rays, packets);        // boxes are hit
+  EXPECT_GT(frustum_culled, 2 * packets);  // and culled
 }
 
 TEST(BvhPacket, RejectsBadParameters) {

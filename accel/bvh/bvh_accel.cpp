@@ -3,7 +3,8 @@
 // into:
 //
 //   builder=binned|sweep|sbvh|lbvh   opt=none|reinsert   layout=bvh2|bvh4|bvh8
-//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray packets)
+//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray frustum packets)
+//   simd=1|0 (0: the wide layouts walked with scalar tests, same hits and counts)
 //
 // Every combination reports the same statistics: build ms, bytes, nodes,
 // leaves, depth and SAH cost of the traced structure (constants in
@@ -59,7 +60,8 @@ struct BvhConfig {
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
-  int packet = 0;  // 16: closest-hit batches as 16-ray packets (traverse_packet.h); bvh8 only
+  int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 only
+  bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
 };
 
 int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
@@ -102,21 +104,25 @@ using Bvh2Kernel = BinaryTreeKernel<Bvh2Layout, Bvh2View, bvh2_view, outline_bvh
 using SphereKernel = BinaryTreeKernel<SphereBvh, SphereBvhView, sphere_bvh_view, outline_sphere_bvh>;
 
 // The wide layouts test triangles with the vectorised watertight test only.
-template <int N, int W>
-class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
-  using Batch = BatchAccelerator<WideKernel<N, W>, Kernel>;
+// kScalar: `simd=0`, the same tree and walk with scalar tests (traverse_wide.h).
+template <int N, int W, bool kScalar = false>
+class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kernel> {
+  using Batch = BatchAccelerator<WideKernel<N, W, kScalar>, Kernel>;
 
  public:
   WideKernel(WideBvh<N, W> bvh, bool packets)
       : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref, wide_fma_origin_limit(bvh_.root_box)};
+    // The packet walk pushes leaves as (parent node, slot) in a child reference.
+    if (packets_ && bvh_.nodes.size() > (wide_ref::kLeafBit >> 3))
+      throw std::runtime_error("bvh: too many nodes for packet=16");
   }
 
   // packet=16: uninstrumented closest-hit batches go through the packet
   // tracer (same answers); counted batches take the single-ray kernel, whose
   // counters mean what every structure's mean.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if constexpr (N == 8) {
+    if constexpr (N == 8 && !kScalar) {
       if (packets_ && !stats) {
         PacketTracer<W>(view_).intersect(rays, hits);
         return;
@@ -127,7 +133,7 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
 
   template <TriangleTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_wide<N, W, kAnyHit, kCount>(view_, ray, stats);
+    return traverse_wide<N, W, kAnyHit, kCount, kScalar>(view_, ray, stats);
   }
   void outline(int max_depth, StructureOutline& out) const override { outline_wide(bvh_, max_depth, out); }
   size_t bytes() const { return bvh_.bytes(); }
@@ -138,10 +144,10 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W>, Kernel> {
   WideView<N, W> view_;
 };
 
-template <int N, int W>
+template <int N, int W, bool kScalar = false>
 std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
                                          size_t& bytes) {
-  auto k = std::make_unique<WideKernel<N, W>>(make_wide_bvh<N, W>(tree, mesh), packets);
+  auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh), packets);
   bytes = k->bytes();
   return k;
 }
@@ -296,7 +302,10 @@ class BvhAccel final : public Accelerator {
       throw std::runtime_error("bvh: tree too deep for the traversal stack");
     const int block = block_width();
     const bool packets = cfg_.packet == kPacketSize;
-    if (cfg_.layout == LayoutKind::Bvh4) {
+    if (!cfg_.simd) {  // block=8 (checked by the spec parser)
+      if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, bytes);
+      else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, bytes);
+    } else if (cfg_.layout == LayoutKind::Bvh4) {
       if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, bytes);
       else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, bytes);
       else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, bytes);
@@ -344,10 +353,14 @@ AcceleratorInfo bvh_accelerator_info() {
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
        triangle_test_param("; mt with layout=bvh2 only"),
-       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches as 16-ray packets, single rays where they diverge)",
+       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches: 16 rays from one origin as one frustum, other rays singly)",
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
-        one_of({"box", "sphere"})}},
+        one_of({"box", "sphere"})},
+       {"simd", "1",
+        "1 = SIMD node and leaf tests; 0 = the same tree and walk with scalar tests (same hits and counts; "
+        "wide layouts need block=8; bvh2 is scalar either way)",
+        boolean_flag()}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
         const auto& b = p.str("builder");
@@ -374,16 +387,21 @@ AcceleratorInfo bvh_accelerator_info() {
         c.block_cost = static_cast<float>(p.real("ci"));
         c.tri = parse_triangle_test(p);
         c.packet = p.integer("packet");
+        c.simd = p.boolean("simd");
+        if (!c.simd && c.packet != 0) throw SpecError("bvh: packet=16 needs simd=1");
+        if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
+          throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
           throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
         return std::make_unique<BvhAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt,layout=bvh2";
+  info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
-                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt"};
+                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},

@@ -185,7 +185,10 @@ V fmadd_by_lanes(V a, V b, V c) {
   friend vfloat operator-(vfloat a, vfloat b) { return {MM##_sub_ps(a.v, b.v)}; }  \
   friend vfloat operator*(vfloat a, vfloat b) { return {MM##_mul_ps(a.v, b.v)}; }  \
   friend vfloat operator/(vfloat a, vfloat b) { return {MM##_div_ps(a.v, b.v)}; }  \
-  friend vfloat andnot(vfloat a, vfloat b) { return {MM##_andnot_ps(a.v, b.v)}; }  \
+  friend vfloat andnot(vfloat a, vfloat b) { return {MM##_andnot_ps(a.v, b.v)}; }
+
+// Float min/max (x86: the second operand wins when either is NaN).
+#define RAYLAB_VF_MIN_MAX(MM)                                                      \
   friend vfloat min(vfloat a, vfloat b) { return {MM##_min_ps(a.v, b.v)}; }        \
   friend vfloat max(vfloat a, vfloat b) { return {MM##_max_ps(a.v, b.v)}; }
 
@@ -224,6 +227,7 @@ template <>
 struct vfloat<4> {
   __m128 v;
   RAYLAB_VF_INTRINSICS(_mm)
+  RAYLAB_VF_MIN_MAX(_mm)
 #if defined(__SSE4_1__)
   RAYLAB_VF_INTEGER_MIN_MAX(_mm, 128)
 #else
@@ -257,6 +261,7 @@ template <>
 struct vfloat<8> {
   __m256 v;
   RAYLAB_VF_INTRINSICS(_mm256)
+  RAYLAB_VF_MIN_MAX(_mm256)
 #if defined(__AVX2__)
   RAYLAB_VF_INTEGER_MIN_MAX(_mm256, 256)
 #else
@@ -288,6 +293,8 @@ struct vfloat<16> {
   RAYLAB_VF_INTRINSICS(_mm512)
   // Zero-masking forms with a full mask: GCC 12's unmasked forms read an
   // undefined vector and trip -Wmaybe-uninitialized (as in sort_network.h).
+  friend vfloat min(vfloat a, vfloat b) { return {_mm512_maskz_min_ps(0xFFFF, a.v, b.v)}; }
+  friend vfloat max(vfloat a, vfloat b) { return {_mm512_maskz_max_ps(0xFFFF, a.v, b.v)}; }
   friend vfloat min_bits(vfloat a, vfloat b) {
     return {_mm512_castsi512_ps(_mm512_maskz_min_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
   }
@@ -300,6 +307,7 @@ struct vfloat<16> {
 #endif
 
 #undef RAYLAB_VF_INTRINSICS
+#undef RAYLAB_VF_MIN_MAX
 #undef RAYLAB_VF_MASK_COMPARE
 #undef RAYLAB_VF_INTEGER_MIN_MAX
 #undef RAYLAB_VF_FMADD

@@ -1,30 +1,32 @@
 #pragma once
 // Packet traversal of the 8-wide BVH for coherent rays (`bvh:packet=16`):
-// 16 rays walk the tree together, one child box at a time against all 16
-// rays in one 16-lane vector (Wald, Slusallek, Benthin and Wagner, "Interactive
-// Rendering with Coherent Ray Tracing", EG 2001; the wide-node form as in
-// Embree's hybrid traversal). A node's 8 boxes are fetched once for the
-// packet instead of once per ray, which is where coherent camera rays gain.
+// 16 rays from one origin walk the tree as one frustum. Each node's 8 child
+// boxes are tested once for the whole packet by interval arithmetic over
+// the rays' reciprocal directions (Wald, Boulos and Shirley, "Ray Tracing
+// Deformable Scenes Using Dynamic Bounding Volume Hierarchies", ACM TOG
+// 2007; Reshetov, Soupikov and Hurley, "Multi-Level Ray Tracing Algorithm",
+// SIGGRAPH 2005, for the frustum idea), so an inner node costs about what it
+// costs one ray. At a leaf every ray takes its own box test of the leaf (the
+// single-ray test, lane by lane), and the rays that pass test the leaf's
+// triangles one triangle at a time, 16 rays per vector.
 //
-// Divergence (Benthin, Wald, Woop, Ernst and Mark, "Combining Single and
-// Packet-Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
-// Architecture", HPG 2012): a subtree entered by few rays of the packet is
-// finished by the single-ray walk (walk_wide) for each of them, and a
-// packet whose rays do not share one origin and one direction octant is
-// traced as single rays from the start. Packets pay on rays from one point
-// (pinhole camera rays); rays from many points towards similar targets
-// (shadow rays of a camera's hits) spread over the tree after a few levels
-// and were measured slower as packets than as single rays (docs/bvh-speed.md),
-// so diffuse, shadow and random sets pay only this test.
+// Only 16-ray chunks whose rays share one origin and one direction octant
+// form a packet (pinhole camera rays); everything else is traced by the
+// single-ray kernel (Benthin, Wald, Woop, Ernst and Mark, HPG 2012, combine
+// packets and single rays the same way). Rays the fast kernel does not take (invalid, nearly axis-parallel,
+// tmin < 0, origin far outside the scene) are traced singly. Rays from many
+// points (shadow rays of a camera's hits) were measured slower as packets
+// than as single rays (docs/bvh-speed.md), so diffuse, shadow and random
+// sets pay only the common-origin test.
 //
-// Answers equal the single-ray walk's bit for bit: per ray the box test is
-// the single-ray FMA slab test on the same values (near plane by the sign of
-// the direction, far plane scaled by kSlabFarScale), culling only boxes the
-// ray cannot hit within its current closest hit, and leaves run the same
-// per-ray block test (intersect_block_leaf); with the recorder's tie rule
+// Answers equal the single-ray walk's bit for bit: the frustum test culls a
+// box only when every ray's own box test would cull it (see PacketFrustum),
+// a leaf's triangles are tested only by rays whose own test enters the
+// leaf's box, and each ray's triangle test computes, lane by lane, the
+// values the single-ray block test computes. With the recorder's tie rule
 // (least (t, prim), see HitRecorder) the visiting order does not matter.
-// Rays the fast kernel does not take (invalid, nearly axis-parallel, tmin <
-// 0) are traced singly. Closest hit only: occlusion stays single-ray.
+// Closest hit only: occlusion stays single-ray.
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -34,64 +36,278 @@ namespace raylab {
 
 inline constexpr int kPacketSize = 16;
 
-// Per-ray constants of the packet box test, one lane per ray: the values
-// init_node_ray gives the single-ray kernel (the near plane gets -(o * inv)
-// rounded up, the far plane -(o * inv) rounded down). The rays of a packet
-// share one octant, so the near and far plane of each axis are the same for
-// all of them (near_row / far_row: the rows of WideNode::bounds).
-struct PacketNodeRays {
+// The watertight test's dominant axis of a direction (WatertightRay::kz).
+inline int dominant_axis(const Vec3f& d) {
+  const Vec3f ad = d.cwiseAbs();
+  return (ad.x() >= ad.y()) ? (ad.x() >= ad.z() ? 0 : 2) : (ad.y() >= ad.z() ? 1 : 2);
+}
+
+// Least and greatest lane of a 16-lane vector.
+inline float lanes_min(simd::vfloat<kPacketSize> x) {
+#if defined(RAYLAB_SIMD_AVX512)
+  // Halving (zero-masking extracts: see vfloat<16> on GCC 12's warnings).
+  const __m256 h = _mm256_min_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
+  const __m128 q = _mm_min_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+  const __m128 e = _mm_min_ps(q, _mm_movehl_ps(q, q));
+  return _mm_cvtss_f32(_mm_min_ss(e, _mm_movehdup_ps(e)));
+#else
+  alignas(64) float f[kPacketSize];
+  x.store(f);
+  return *std::min_element(f, f + kPacketSize);
+#endif
+}
+inline float lanes_max(simd::vfloat<kPacketSize> x) {
+#if defined(RAYLAB_SIMD_AVX512)
+  const __m256 h = _mm256_max_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
+  const __m128 q = _mm_max_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+  const __m128 e = _mm_max_ps(q, _mm_movehl_ps(q, q));
+  return _mm_cvtss_f32(_mm_max_ss(e, _mm_movehdup_ps(e)));
+#else
+  alignas(64) float f[kPacketSize];
+  x.store(f);
+  return *std::max_element(f, f + kPacketSize);
+#endif
+}
+
+// 16 rays in structure-of-arrays form.
+struct PacketInput {
+  alignas(64) float org[3][kPacketSize];
+  alignas(64) float dir[3][kPacketSize];
+  alignas(64) float tmin[kPacketSize];
+  alignas(64) float tmax[kPacketSize];
+
+  explicit PacketInput(std::span<const Ray> rays) {
+    for (int i = 0; i < kPacketSize; ++i) {
+      const Ray& r = rays[i];
+      for (int a = 0; a < 3; ++a) org[a][i] = r.org[a], dir[a][i] = r.dir[a];
+      tmin[i] = r.tmin;
+      tmax[i] = r.tmax;
+    }
+  }
+
+  // True when the rays form a packet: one origin, one direction octant, and
+  // each ray one the fast single-ray kernel takes (valid, not nearly
+  // axis-parallel, tmin >= 0, origin within fma_origin_limit: see
+  // traverse_wide), lane by lane.
+  bool coherent(float fma_origin_limit) const {
+    using V = simd::vfloat<kPacketSize>;
+    constexpr uint32_t kAll = (1u << kPacketSize) - 1u;
+    const V zero = V::broadcast(0.0f), sign = V::broadcast(-0.0f);
+    bool ok = true;
+    for (int a = 0; a < 3; ++a) {
+      const float o = org[a][0];
+      ok &= (o - o == 0.0f) & !(std::fabs(o) > fma_origin_limit);  // finite, near enough
+      ok &= cmp_eq(V::load(org[a]), V::broadcast(o)) == kAll;
+      const V d = V::load(dir[a]);
+      ok &= cmp_ge(andnot(sign, d), V::broadcast(1e-30f)) == kAll;  // not (nearly) axis-parallel, not NaN
+      ok &= cmp_eq(d - d, zero) == kAll;                    // finite
+      const uint32_t neg = cmp_lt(d, zero);
+      ok &= neg == 0 || neg == kAll;  // one octant
+    }
+    const V t0 = V::load(tmin);
+    ok &= (cmp_ge(t0, zero) & cmp_le(t0, V::load(tmax))) == kAll;
+    return ok;
+  }
+};
+
+// Per-ray constants of a packet, one lane per ray: the single-ray box test's
+// reciprocals and plane shifts (the values init_node_ray computes, in vector
+// form), and the watertight test's shear (WatertightRay). The shear's axis
+// permutation follows the ray's dominant axis kz (kx, ky then follow from kz
+// and the packet's octant), so the lanes fall into up to three groups, each
+// tested with its own permutation (lanes_of_kz). Vector division is correctly
+// rounded, so every value equals the scalar one.
+struct PacketRays {
   using V = simd::vfloat<kPacketSize>;
   V inv[3], near_shift[3], far_shift[3];
   V tmin;
-  int near_row[3], far_row[3];
+  alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize], tmin_lane[kPacketSize];
+  float org[3];
+  int near_row[3], far_row[3];  // rows of WideNode::bounds: the octant's near / far plane per axis
+  uint32_t lanes_of_kz[3];       // the lanes whose dominant axis is kz
+  int axes[3][3];                // for each kz: the permuted axes kx, ky, kz
 };
 
-// Slab constants of one ray, as the scalar branch of init_node_ray.
-inline void packet_ray_constants(const Ray& r, float inv[3], float near_shift[3], float far_shift[3]) {
-  const SlabRay sr(r);
+// The packet's frustum in interval form (Wald, Boulos and Shirley 2007):
+// per axis the range [inv_lo, inv_hi] of the rays' reciprocals (one sign: one
+// octant), the least near shift and the greatest far shift. For a plane x,
+// every ray's computed near distance fl(x * inv_i + near_shift_i) is at least
+// fl(min(x * inv_lo, x * inv_hi) + least shift): x * inv is monotonic in inv
+// and rounding is monotonic; the test computes that bound exactly as the min
+// of two FMAs. The far side is the mirror image. So a box the frustum test
+// culls is culled by every ray's own test.
+struct PacketFrustum {
+  using V = simd::vfloat<8>;
+  V inv_lo[3], inv_hi[3], near_shift[3], far_shift[3];
+  V tmin;  // least tmin of the packet (>= +0)
+  int near_off[3], far_off[3];  // float offsets of the near / far plane rows in a node
+};
+
+// Closest hits of a packet, one lane per ray; t starts at the ray's tmax,
+// prim at kInvalidPrim.
+struct PacketHits {
+  alignas(64) float t[kPacketSize];
+  alignas(64) float u[kPacketSize];
+  alignas(64) float v[kPacketSize];
+  alignas(64) uint32_t prim[kPacketSize];
+
+  // The greatest closest-hit bound over the lanes.
+  float greatest_t() const { return *std::max_element(t, t + kPacketSize); }
+};
+
+// L lanes of a packet's hits from lane `first` on (L = 16, or 8 when a leaf
+// is entered by rays of one half only), in registers while a leaf is tested.
+template <int L>
+struct HitLanes {
+  using V = simd::vfloat<L>;
+  V t, u, v;
+  uint32_t* prim;
+
+  HitLanes(const PacketHits& h, int first)
+      : t(V::load(h.t + first)), u(V::load(h.u + first)), v(V::load(h.v + first)),
+        prim(const_cast<uint32_t*>(h.prim) + first) {}
+  void store(PacketHits& h, int first) const { t.store(h.t + first), u.store(h.u + first), v.store(h.v + first); }
+
+  // Offers candidate hits (t, u, v) of triangle `cprim` in the lanes of
+  // `mask` (which hold tmin <= ct <= t): kept by the recorder's rule,
+  // strictly nearer, or as near with a lower primitive id (HitRecorder).
+  void record(uint32_t mask, V ct, V cu, V cv, uint32_t cprim) {
+#if defined(RAYLAB_SIMD_AVX512)
+    if constexpr (L == 16) {
+      const __m512i p = _mm512_load_si512(prim);
+      const __m512i cp = _mm512_set1_epi32(static_cast<int>(cprim));
+      const __mmask16 keep = static_cast<__mmask16>(mask & (cmp_lt(ct, t) | _mm512_cmpgt_epu32_mask(p, cp)));
+      t.v = _mm512_mask_mov_ps(t.v, keep, ct.v);
+      u.v = _mm512_mask_mov_ps(u.v, keep, cu.v);
+      v.v = _mm512_mask_mov_ps(v.v, keep, cv.v);
+      _mm512_store_si512(prim, _mm512_mask_mov_epi32(p, keep, cp));
+      return;
+    } else if constexpr (L == 8) {
+      const __m256i p = _mm256_load_si256(reinterpret_cast<const __m256i*>(prim));
+      const __m256i cp = _mm256_set1_epi32(static_cast<int>(cprim));
+      const __mmask8 keep = static_cast<__mmask8>(mask & (cmp_lt(ct, t) | _mm256_cmpgt_epu32_mask(p, cp)));
+      t.v = _mm256_mask_mov_ps(t.v, keep, ct.v);
+      u.v = _mm256_mask_mov_ps(u.v, keep, cu.v);
+      v.v = _mm256_mask_mov_ps(v.v, keep, cv.v);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(prim), _mm256_mask_mov_epi32(p, keep, cp));
+      return;
+    }
+#endif
+    alignas(64) float ft[L], fu[L], fv[L], bt[L], bu[L], bv[L];
+    ct.store(ft), cu.store(fu), cv.store(fv), t.store(bt), u.store(bu), v.store(bv);
+    for (uint32_t m = mask; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      if (ft[i] < bt[i] || cprim < prim[i]) bt[i] = ft[i], bu[i] = fu[i], bv[i] = fv[i], prim[i] = cprim;
+    }
+    t = V::load(bt), u = V::load(bu), v = V::load(bv);
+  }
+};
+
+// The lanes' constants and the frustum, from 16 coherent rays.
+inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr, PacketHits& ph) {
+  using V = simd::vfloat<kPacketSize>;
+  using V8 = simd::vfloat<8>;
+  constexpr int N = 8;
+  const V zero = V::broadcast(0.0f), one = V::broadcast(1.0f);
+  // -0 as +0, as the single-ray kernel (tmin >= 0 here).
+  const V tmin = max(V::load(in.tmin), zero);
+  tmin.store(pr.tmin_lane);
+  pr.tmin = tmin;
+  std::copy(in.tmax, in.tmax + kPacketSize, ph.t);
+  std::fill(ph.u, ph.u + kPacketSize, 0.0f);
+  std::fill(ph.v, ph.v + kPacketSize, 0.0f);
+  std::fill(ph.prim, ph.prim + kPacketSize, kInvalidPrim);
+  int octant = 0;
   for (int a = 0; a < 3; ++a) {
-    inv[a] = sr.inv_dir[a];
-    const float oi = r.org[a] * inv[a];
-    const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;
-    const float u = oi + delta, dn = oi - delta;
-    near_shift[a] = -(u == u ? u : -FLT_MAX);
-    far_shift[a] = -(dn == dn ? dn : FLT_MAX);
+    pr.org[a] = in.org[a][0];
+    const int neg = std::signbit(in.dir[a][0]) ? 1 : 0;
+    octant |= neg << a;
+    pr.near_row[a] = 2 * a + neg;
+    pr.far_row[a] = 2 * a + 1 - neg;
+    // As init_node_ray: o * inv bounded from above and below by |o * inv| *
+    // 2^-22 + FLT_MIN; max/min against -+FLT_MAX turn NaN (inf - inf) into
+    // the clamp, as there.
+    pr.inv[a] = one / V::load(in.dir[a]);
+    const V oi = V::broadcast(pr.org[a]) * pr.inv[a];
+    const V delta = andnot(V::broadcast(-0.0f), oi) * V::broadcast(0x1p-22f) + V::broadcast(FLT_MIN);
+    pr.near_shift[a] = max(oi + delta, V::broadcast(-FLT_MAX)) * V::broadcast(-1.0f);
+    pr.far_shift[a] = min(oi - delta, V::broadcast(FLT_MAX)) * V::broadcast(-1.0f);
+    // The frustum: extremes over the lanes.
+    fr.inv_lo[a] = V8::broadcast(lanes_min(pr.inv[a]));
+    fr.inv_hi[a] = V8::broadcast(lanes_max(pr.inv[a]));
+    fr.near_shift[a] = V8::broadcast(lanes_min(pr.near_shift[a]));
+    fr.far_shift[a] = V8::broadcast(lanes_max(pr.far_shift[a]));
+    fr.near_off[a] = pr.near_row[a] * N;
+    fr.far_off[a] = pr.far_row[a] * N;
+  }
+  fr.tmin = V8::broadcast(lanes_min(tmin));
+  // The watertight shear, as WatertightRay, for each dominant axis present.
+  const V sign = V::broadcast(-0.0f);
+  const V ax = andnot(sign, V::load(in.dir[0])), ay = andnot(sign, V::load(in.dir[1])),
+          az = andnot(sign, V::load(in.dir[2]));
+  const uint32_t x_ge_y = cmp_ge(ax, ay), x_ge_z = cmp_ge(ax, az), y_ge_z = cmp_ge(ay, az);
+  pr.lanes_of_kz[0] = x_ge_y & x_ge_z;
+  pr.lanes_of_kz[1] = ~x_ge_y & y_ge_z & 0xFFFFu;
+  pr.lanes_of_kz[2] = ~(pr.lanes_of_kz[0] | pr.lanes_of_kz[1]) & 0xFFFFu;
+  for (int kz = 0; kz < 3; ++kz) {
+    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+    if (((octant >> kz) & 1) != 0) std::swap(kx, ky);  // keep the winding, as WatertightRay
+    pr.axes[kz][0] = kx, pr.axes[kz][1] = ky, pr.axes[kz][2] = kz;
+    const uint32_t lanes = pr.lanes_of_kz[kz];
+    if (lanes == 0) continue;
+    const V dz = V::load(in.dir[kz]);
+    alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize];
+    (V::load(in.dir[kx]) / dz).store(sx);
+    (V::load(in.dir[ky]) / dz).store(sy);
+    (one / dz).store(sz);
+    for (uint32_t m = lanes; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      pr.sx[i] = sx[i], pr.sy[i] = sy[i], pr.sz[i] = sz[i];
+    }
   }
 }
 
-// Per-ray constants of the packet triangle test, one lane per ray: the
-// WatertightRay values (translated origin along the permuted axes, shear).
-// Used when every ray of the packet has the same axis permutation (camera
-// rays nearly always do), so one triangle's vertices are read once for all
-// lanes.
-struct PacketTriangleRays {
-  using V = simd::vfloat<kPacketSize>;
-  V ox, oy, oz, sx, sy, sz, tmin;
-  int kx = 0, ky = 1, kz = 2;
-};
-
-// True when the ray may join a packet: what the fast single-ray kernel takes.
-inline bool packet_ray_ok(const Ray& r, float fma_origin_limit) {
-  return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f && !origin_beyond(r, fma_origin_limit);
+// The 8 child boxes against the frustum: the mask of children some ray may
+// enter before tmax_hi (the packet's greatest closest hit so far), and
+// lower bounds of the rays' entry distances (for the visiting order).
+inline uint32_t frustum_children(const WideNode<8>& node, const PacketFrustum& f, simd::vfloat<8> tmax_hi,
+                                 simd::vfloat<8>& tnear) {
+  using V8 = simd::vfloat<8>;
+  const float* b = &node.bounds[0][0];
+  V8 lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const V8 pn = V8::load(b + f.near_off[a]);
+    const V8 pf = V8::load(b + f.far_off[a]);
+    lo[a] = min(fmadd(pn, f.inv_lo[a], f.near_shift[a]), fmadd(pn, f.inv_hi[a], f.near_shift[a]));
+    hi[a] = max(fmadd(pf, f.inv_lo[a], f.far_shift[a]), fmadd(pf, f.inv_hi[a], f.far_shift[a]));
+  }
+  // Integer-order min/max as in intersect_children (tmin >= +0).
+  tnear = max_bits(max_bits(lo[0], lo[1]), max_bits(lo[2], f.tmin));
+  const V8 tfar = min_bits(min_bits(hi[0], hi[1]), min_bits(hi[2], tmax_hi)) * V8::broadcast(kSlabFarScale);
+  return cmp_le(tnear, tfar);
 }
 
-// Direction octant (bit a = sign of component a).
-inline int ray_octant(const Ray& r) {
-  return static_cast<int>(std::signbit(r.dir.x())) | static_cast<int>(std::signbit(r.dir.y())) << 1 |
-         static_cast<int>(std::signbit(r.dir.z())) << 2;
+// The rays whose own box test (the single-ray FMA slab test, lane by lane)
+// enters child `slot` of `node` before their closest hit.
+inline uint32_t rays_entering(const WideNode<8>& node, uint32_t slot, const PacketRays& pr,
+                              simd::vfloat<kPacketSize> tmax) {
+  using V = simd::vfloat<kPacketSize>;
+  V near[3], far[3];
+  for (int a = 0; a < 3; ++a) {
+    near[a] = fmadd(V::broadcast(node.bounds[pr.near_row[a]][slot]), pr.inv[a], pr.near_shift[a]);
+    far[a] = fmadd(V::broadcast(node.bounds[pr.far_row[a]][slot]), pr.inv[a], pr.far_shift[a]);
+  }
+  const V tnear = max_bits(max_bits(near[0], near[1]), max_bits(near[2], pr.tmin));
+  const V tfar = min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)) * V::broadcast(kSlabFarScale);
+  return cmp_le(tnear, tfar);
 }
 
 template <int W>
 class PacketTracer {
  public:
   using V = simd::vfloat<kPacketSize>;
-  using Rec = HitRecorder<false, false>;
+  using V8 = simd::vfloat<8>;
   static constexpr int N = 8;
-
-  // Subtrees entered by at most this many rays are finished ray by ray.
-  static constexpr int kSingleRayBelow = 3;
-  // Leaves reached by at least this many rays test triangles packet-wise.
-  static constexpr int kPacketLeafFrom = 4;
 
   explicit PacketTracer(const WideView<N, W>& bvh) : bvh_(bvh) {}
 
@@ -99,204 +315,84 @@ class PacketTracer {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
     for (size_t b = 0; b < rays.size(); b += kPacketSize) {
       const size_t n = std::min<size_t>(kPacketSize, rays.size() - b);
-      if (shares_origin(rays.subspan(b, n))) {
-        trace_group(rays.subspan(b, n), hits.subspan(b, n));
-      } else {
-        // The common incoherent case first, in the plain single-ray loop.
-        for (size_t i = b; i < b + n; ++i) trace_single(rays[i], hits[i]);
+      // First and last ray from one point (cheap, and false for most
+      // incoherent chunks), then the whole test on the gathered lanes.
+      if (n == kPacketSize && !wide_ref::is_leaf(bvh_.root_ref) && rays[b].org == rays[b + n - 1].org) {
+        const PacketInput in(rays.subspan(b, n));
+        if (in.coherent(bvh_.fma_origin_limit)) {
+          trace_packet(in, hits.subspan(b, n));
+          continue;
+        }
       }
+      for (size_t i = b; i < b + n; ++i) trace_single(rays[i], hits[i]);
     }
   }
 
  private:
-  static bool shares_origin(std::span<const Ray> rays) {
-    bool same = true;
-    for (const Ray& r : rays) same &= r.org == rays[0].org;
-    return same;
-  }
+  // Leaf children are pushed as (parent node, slot), so that a leaf's visit
+  // can run each ray's test of the leaf's box (WideKernel checks that node
+  // indices fit).
+  static constexpr int kSlotBits = 3;
+  static uint32_t leaf_visit_ref(uint32_t node, uint32_t slot) { return wide_ref::kLeafBit | node << kSlotBits | slot; }
 
   void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
-  // Up to 16 rays: the packet if they share an octant, else one by one.
-  void trace_group(std::span<const Ray> rays, std::span<Hit> hits) const {
-    uint32_t members = 0;
-    int octant = -1;
-    bool coherent = true;
-    const Ray* first = nullptr;
-    for (size_t i = 0; i < rays.size(); ++i) {
-      if (!packet_ray_ok(rays[i], bvh_.fma_origin_limit)) {
-        trace_single(rays[i], hits[i]);
-        continue;
-      }
-      const int o = ray_octant(rays[i]);
-      if (!first) first = &rays[i];
-      coherent &= (octant < 0 || o == octant) && rays[i].org == first->org;
-      octant = o;
-      members |= 1u << i;
-    }
-    if (!coherent || simd::popcount(members) <= kSingleRayBelow) {
-      for (uint32_t m = members; m != 0; m &= m - 1) trace_single(rays[simd::ctz(m)], hits[simd::ctz(m)]);
-      return;
-    }
-    trace_packet(rays, hits, members, octant);
+  void trace_packet(const PacketInput& in, std::span<Hit> hits) const {
+    PacketRays pr;
+    PacketFrustum fr;
+    PacketHits ph;
+    make_packet(in, pr, fr, ph);
+    walk(pr, fr, ph);
+    for (int i = 0; i < kPacketSize; ++i)
+      hits[i] = ph.prim[i] == kInvalidPrim ? Hit{} : Hit{ph.t[i], ph.u[i], ph.v[i], ph.prim[i]};
   }
 
-  // The packet walk; `members` marks the lanes that hold rays of the packet.
-  void trace_packet(std::span<const Ray> rays, std::span<Hit> hits, uint32_t members, int octant) const {
-    PacketNodeRays pr;
-    for (int a = 0; a < 3; ++a) {
-      const int neg = (octant >> a) & 1;
-      pr.near_row[a] = 2 * a + neg;
-      pr.far_row[a] = 2 * a + 1 - neg;
-    }
-    {
-      alignas(64) float inv[3][kPacketSize], lo[3][kPacketSize], hi[3][kPacketSize], tmin[kPacketSize];
-      const uint32_t first = simd::ctz(members);
-      for (int i = 0; i < kPacketSize; ++i) {
-        // Lanes without a ray copy the first member (their mask bit stays 0).
-        const Ray& r = rays[(members >> i) & 1u ? i : first];
-        float iv[3], ls[3], hs[3];
-        packet_ray_constants(r, iv, ls, hs);
-        for (int a = 0; a < 3; ++a) inv[a][i] = iv[a], lo[a][i] = ls[a], hi[a][i] = hs[a];
-        tmin[i] = r.tmin == 0.0f ? 0.0f : r.tmin;  // -0 as +0, as the single-ray kernel
-      }
-      for (int a = 0; a < 3; ++a) {
-        pr.inv[a] = V::load(inv[a]);
-        pr.near_shift[a] = V::load(lo[a]);
-        pr.far_shift[a] = V::load(hi[a]);
-      }
-      pr.tmin = V::load(tmin);
-    }
-    // Triangle constants per lane, when all rays share the axis permutation.
-    PacketTriangleRays pt;
-    bool packet_leaves = true;
-    {
-      alignas(64) float ox[kPacketSize], oy[kPacketSize], oz[kPacketSize], sx[kPacketSize], sy[kPacketSize],
-          sz[kPacketSize], tmin[kPacketSize];
-      const WatertightRay w0(rays[simd::ctz(members)]);
-      pt.kx = w0.kx, pt.ky = w0.ky, pt.kz = w0.kz;
-      for (int i = 0; i < kPacketSize; ++i) {
-        const Ray& r = rays[(members >> i) & 1u ? i : simd::ctz(members)];
-        const WatertightRay w(r);
-        packet_leaves &= w.kx == pt.kx && w.ky == pt.ky && w.kz == pt.kz;
-        ox[i] = w.org[w.kx], oy[i] = w.org[w.ky], oz[i] = w.org[w.kz];
-        sx[i] = w.sx, sy[i] = w.sy, sz[i] = w.sz;
-        tmin[i] = r.tmin;
-      }
-      pt.ox = V::load(ox), pt.oy = V::load(oy), pt.oz = V::load(oz);
-      pt.sx = V::load(sx), pt.sy = V::load(sy), pt.sz = V::load(sz);
-      pt.tmin = V::load(tmin);
-    }
-    // Per-ray recorders (lanes without a ray: the first member's ray, never
-    // used) and block-test constants (built at a ray's first leaf).
-    const Ray& first_ray = rays[simd::ctz(members)];
-    Rec rec[kPacketSize] = {Rec(first_ray, nullptr), Rec(first_ray, nullptr), Rec(first_ray, nullptr),
-                            Rec(first_ray, nullptr), Rec(first_ray, nullptr), Rec(first_ray, nullptr),
-                            Rec(first_ray, nullptr), Rec(first_ray, nullptr), Rec(first_ray, nullptr),
-                            Rec(first_ray, nullptr), Rec(first_ray, nullptr), Rec(first_ray, nullptr),
-                            Rec(first_ray, nullptr), Rec(first_ray, nullptr), Rec(first_ray, nullptr),
-                            Rec(first_ray, nullptr)};
-    static_assert(kPacketSize == 16, "one initialiser per lane above");
-    alignas(64) float tmax[kPacketSize];
-    for (int i = 0; i < kPacketSize; ++i) {
-      if ((members >> i) & 1u) rec[i] = Rec(rays[i], nullptr);
-      tmax[i] = rec[i].tmax();
-    }
-    BlockRay<W> br[kPacketSize];
-    uint32_t br_ready = 0;
-    V tmax_v = V::load(tmax);
-    const V far_scale = V::broadcast(kSlabFarScale);
-
-    // Stack: child reference, the rays that entered it and their entry distances.
-    alignas(64) float stack_tnear[kWideStackSize][kPacketSize];
-    uint32_t stack_ref[kWideStackSize];
-    uint32_t stack_mask[kWideStackSize];
+  // The frustum walk: inner nodes culled and ordered for the whole packet,
+  // leaves tested by the rays that enter them.
+  void walk(const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
+    float tmax_hi = ph.greatest_t();
+    alignas(64) uint64_t stack[kWideStackSize];
     int sp = 0;
     uint32_t cur = bvh_.root_ref;
-    uint32_t active = members;
-
     while (true) {
-      if (simd::popcount(active) <= kSingleRayBelow) {
-        // Diverged: finish this subtree ray by ray with the single-ray walk.
-        for (uint32_t m = active; m != 0; m &= m - 1) {
-          const uint32_t i = simd::ctz(m);
-          walk_wide<N, W, false, false, false>(bvh_, rays[i], cur, rec[i]);
-          tmax[i] = rec[i].tmax();
-        }
-        tmax_v = V::load(tmax);
-      } else if (!wide_ref::is_leaf(cur)) {
+      if (!wide_ref::is_leaf(cur)) {
         const WideNode<N>& node = bvh_.nodes[cur];
-        // Test each used child box against the packet; keep the hit ones in
-        // slot order with their ray masks and distances.
-        alignas(64) float tnear_of[N][kPacketSize];
-        uint32_t ref_of[N], mask_of[N];
-        float key_of[N];
-        int hit_children = 0;
-        const uint32_t leader = simd::ctz(active);
-        for (int c = 0; c < N; ++c) {
-          const uint32_t ref = node.child[c];
-          if (ref == wide_ref::kEmpty) continue;
-          // The single-ray FMA slab test (intersect_children), lane by lane;
-          // an unused slot's empty box gives tnear = +inf and is culled.
-          const V nx = fmadd(V::broadcast(node.bounds[pr.near_row[0]][c]), pr.inv[0], pr.near_shift[0]);
-          const V ny = fmadd(V::broadcast(node.bounds[pr.near_row[1]][c]), pr.inv[1], pr.near_shift[1]);
-          const V nz = fmadd(V::broadcast(node.bounds[pr.near_row[2]][c]), pr.inv[2], pr.near_shift[2]);
-          const V fx = fmadd(V::broadcast(node.bounds[pr.far_row[0]][c]), pr.inv[0], pr.far_shift[0]);
-          const V fy = fmadd(V::broadcast(node.bounds[pr.far_row[1]][c]), pr.inv[1], pr.far_shift[1]);
-          const V fz = fmadd(V::broadcast(node.bounds[pr.far_row[2]][c]), pr.inv[2], pr.far_shift[2]);
-          const V tnear = max_bits(max_bits(nx, ny), max_bits(nz, pr.tmin));
-          const V tfar = min_bits(min_bits(fx, fy), min_bits(fz, tmax_v)) * far_scale;
-          const uint32_t m = cmp_le(tnear, tfar) & active;
-          if (m == 0) continue;
-          tnear.store(tnear_of[hit_children]);
-          ref_of[hit_children] = ref;
-          mask_of[hit_children] = m;
-          // Ordered by the first ray that enters it (the leader if it does).
-          key_of[hit_children] = tnear_of[hit_children][(m >> leader) & 1u ? leader : simd::ctz(m)];
-          ++hit_children;
-        }
-        if (hit_children == 0) {
-          if (!pop(stack_tnear, stack_ref, stack_mask, sp, tmax_v, cur, active)) break;
+        V8 tnear;
+        const uint32_t mask = frustum_children(node, fr, V8::broadcast(tmax_hi), tnear);
+        if (mask != 0) {
+          alignas(32) uint32_t refs[N];
+          for (uint32_t c = 0; c < N; ++c)
+            refs[c] = wide_ref::is_leaf(node.child[c]) ? leaf_visit_ref(cur, c) : node.child[c];
+          if ((mask & (mask - 1)) == 0) {
+            cur = refs[simd::ctz(mask)];
+          } else {
+            cur = push_by_distance<N>(refs, mask, tnear, stack, sp,
+                                      [&](uint32_t i) { prefetch_child(bvh_, node.child[i]); });
+          }
           continue;
         }
-        // Push all but the nearest, farthest first; visit the nearest.
-        int order[N];
-        for (int k = 0; k < hit_children; ++k) order[k] = k;
-        for (int k = 1; k < hit_children; ++k)  // insertion sort, descending key
-          for (int j = k; j > 0 && key_of[order[j]] > key_of[order[j - 1]]; --j) std::swap(order[j], order[j - 1]);
-        for (int k = 0; k < hit_children - 1; ++k) {
-          const int c = order[k];
-          prefetch_child(bvh_, ref_of[c]);
-          V::load(tnear_of[c]).store(stack_tnear[sp]);
-          stack_ref[sp] = ref_of[c];
-          stack_mask[sp] = mask_of[c];
-          ++sp;
-        }
-        cur = ref_of[order[hit_children - 1]];
-        active = mask_of[order[hit_children - 1]];
-        continue;
-      } else if (packet_leaves && simd::popcount(active) >= kPacketLeafFrom) {
-        // Leaf, many rays: one triangle against all of them.
-        const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(cur);
-        const uint32_t nblocks = wide_ref::leaf_blocks(cur);
-        for (uint32_t b = 0; b < nblocks; ++b) packet_block(blocks[b], pt, active, rec, tmax, tmax_v);
       } else {
-        // Leaf, few rays: each runs the single-ray block test.
-        const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(cur);
-        const uint32_t nblocks = wide_ref::leaf_blocks(cur);
-        for (uint32_t m = active; m != 0; m &= m - 1) {
-          const uint32_t i = simd::ctz(m);
-          if (!((br_ready >> i) & 1u)) {
-            br[i].init(WatertightRay(rays[i]));
-            br_ready |= 1u << i;
-          }
-          if (intersect_block_leaf<W>(blocks, nblocks, br[i], rays[i].tmin, rec[i])) tmax[i] = rec[i].tmax();
+        const WideNode<N>& parent = bvh_.nodes[(cur & ~wide_ref::kLeafBit) >> kSlotBits];
+        const uint32_t slot = cur & ((1u << kSlotBits) - 1u);
+        const uint32_t active = rays_entering(parent, slot, pr, V::load(ph.t));
+        if (active != 0) {
+          const uint32_t leaf = parent.child[slot];
+          const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
+          const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
+          // Rays of one half only: half-width vectors.
+          if ((active >> 8) == 0) intersect_leaf<8>(blocks, nblocks, pr, 0, active, ph);
+          else if ((active & 0xFFu) == 0) intersect_leaf<8>(blocks, nblocks, pr, 8, active >> 8, ph);
+          else intersect_leaf<16>(blocks, nblocks, pr, 0, active, ph);
+          tmax_hi = ph.greatest_t();
         }
-        tmax_v = V::load(tmax);
       }
-      if (!pop(stack_tnear, stack_ref, stack_mask, sp, tmax_v, cur, active)) break;
+      // Next stack entry some ray can still enter before its closest hit
+      // (the single-ray walk culls the same way, see walk_wide's pop).
+      const float limit = tmax_hi * kSlabFarScale;
+      while (sp > 0 && key_dist(stack[sp - 1]) > limit) --sp;
+      if (sp == 0) return;
+      cur = key_ref(stack[--sp]);
     }
-    for (uint32_t m = members; m != 0; m &= m - 1) hits[simd::ctz(m)] = rec[simd::ctz(m)].hit();
   }
 
   // The watertight test of intersect_block with rays in the lanes instead of
@@ -304,67 +400,64 @@ class PacketTracer {
   // same values (translate, shear, edge functions, the double-precision
   // recomputation of an exactly-zero edge function, sign test, t = tt *
   // (1 / det)), so each ray gets bit for bit the t, u, v its single-ray test
-  // gives. (intersect_block's early rejection of hits behind the origin only
-  // saves work: those lanes fail t >= tmin here.) Each hit is offered to the
-  // ray's recorder, whose tie rule makes the order irrelevant.
-  static void packet_block(const TriangleBlock<W>& blk, const PacketTriangleRays& r, uint32_t active, Rec* rec,
-                           float* tmax, V& tmax_v) {
-    const V zero = V::broadcast(0.0f);
+  // gives. The rays share their origin, so a vertex's translation p - org is
+  // one value for all lanes, computed once per block. (intersect_block's
+  // early rejection of hits behind the origin only saves work: those lanes
+  // fail t >= tmin here.) Hits are kept by the recorder's rule (HitRecorder).
+  template <int L>
+  static void intersect_leaf(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
+                             uint32_t active, PacketHits& ph) {
+    HitLanes<L> h(ph, first);
+    for (int kz = 0; kz < 3; ++kz) {
+      const uint32_t lanes = active & (r.lanes_of_kz[kz] >> first);
+      if (lanes == 0) continue;
+      for (uint32_t b = 0; b < nblocks; ++b) intersect_block_packet<L>(blocks[b], r, r.axes[kz], first, lanes, h);
+    }
+    h.store(ph, first);
+  }
+
+  template <int L>
+  static void intersect_block_packet(const TriangleBlock<W>& blk, const PacketRays& r, const int* axis, int first,
+                                     uint32_t active, HitLanes<L>& h) {
+    using VL = simd::vfloat<L>;
+    using VW = simd::vfloat<W>;
+    // Translated vertices: rel[corner][k][lane], k = 0, 1, 2 for kx, ky, kz (axis[k]).
+    alignas(64) float rel[3][3][W];
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k)
+        (VW::load(blk.v[c][axis[k]]) - VW::broadcast(r.org[axis[k]])).store(rel[c][k]);
+    const VL sx = VL::load(r.sx + first), sy = VL::load(r.sy + first), sz = VL::load(r.sz + first);
+    const VL tmin = VL::load(r.tmin_lane + first);
+    const VL zero = VL::broadcast(0.0f);
     const int count = blk.count();  // padding lanes repeat the first triangle
     for (int j = 0; j < count; ++j) {
-      const V az0 = V::broadcast(blk.v[0][r.kz][j]) - r.oz;
-      const V bz0 = V::broadcast(blk.v[1][r.kz][j]) - r.oz;
-      const V cz0 = V::broadcast(blk.v[2][r.kz][j]) - r.oz;
-      const V ax = (V::broadcast(blk.v[0][r.kx][j]) - r.ox) - r.sx * az0;
-      const V ay = (V::broadcast(blk.v[0][r.ky][j]) - r.oy) - r.sy * az0;
-      const V bx = (V::broadcast(blk.v[1][r.kx][j]) - r.ox) - r.sx * bz0;
-      const V by = (V::broadcast(blk.v[1][r.ky][j]) - r.oy) - r.sy * bz0;
-      const V cx = (V::broadcast(blk.v[2][r.kx][j]) - r.ox) - r.sx * cz0;
-      const V cy = (V::broadcast(blk.v[2][r.ky][j]) - r.oy) - r.sy * cz0;
-      V u = cx * by - cy * bx;
-      V v = ax * cy - ay * cx;
-      V w = bx * ay - by * ax;
+      const VL az0 = VL::broadcast(rel[0][2][j]);
+      const VL bz0 = VL::broadcast(rel[1][2][j]);
+      const VL cz0 = VL::broadcast(rel[2][2][j]);
+      const VL ax = VL::broadcast(rel[0][0][j]) - sx * az0;
+      const VL ay = VL::broadcast(rel[0][1][j]) - sy * az0;
+      const VL bx = VL::broadcast(rel[1][0][j]) - sx * bz0;
+      const VL by = VL::broadcast(rel[1][1][j]) - sy * bz0;
+      const VL cx = VL::broadcast(rel[2][0][j]) - sx * cz0;
+      const VL cy = VL::broadcast(rel[2][1][j]) - sy * cz0;
+      VL u = cx * by - cy * bx;
+      VL v = ax * cy - ay * cx;
+      VL w = bx * ay - by * ax;
       const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
       if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
       const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
       const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
       uint32_t mask = ~(neg & pos) & active;
       if (mask == 0) continue;
-      const V det = u + v + w;
+      const VL det = u + v + w;
       mask &= cmp_neq(det, zero);
       if (mask == 0) continue;
-      const V tt = u * (r.sz * az0) + v * (r.sz * bz0) + w * (r.sz * cz0);
-      const V inv_det = V::broadcast(1.0f) / det;
-      const V t = tt * inv_det;
-      mask &= cmp_ge(t, r.tmin) & cmp_le(t, tmax_v);
-      if (mask == 0) continue;
-      alignas(64) float ft[kPacketSize], fu[kPacketSize], fv[kPacketSize];
-      t.store(ft);
-      (v * inv_det).store(fu);
-      (w * inv_det).store(fv);
-      for (uint32_t m = mask; m != 0; m &= m - 1) {
-        const uint32_t i = simd::ctz(m);
-        if (rec[i].record(ft[i], fu[i], fv[i], blk.prim[j])) tmax[i] = ft[i];
-      }
-      tmax_v = V::load(tmax);
+      const VL tt = u * (sz * az0) + v * (sz * bz0) + w * (sz * cz0);
+      const VL inv_det = VL::broadcast(1.0f) / det;
+      const VL t = tt * inv_det;
+      mask &= cmp_ge(t, tmin) & cmp_le(t, h.t);
+      if (mask != 0) h.record(mask, t, v * inv_det, w * inv_det, blk.prim[j]);
     }
-  }
-
-  // Next stack entry some ray of which can still find a closer hit there;
-  // the rays whose entry distance is beyond their closest hit drop out (the
-  // single-ray walk culls them the same way, see walk_wide's pop).
-  static bool pop(const float (*stack_tnear)[kPacketSize], const uint32_t* stack_ref, const uint32_t* stack_mask,
-                  int& sp, V tmax_v, uint32_t& cur, uint32_t& active) {
-    const V limit = tmax_v * V::broadcast(kSlabFarScale);
-    while (sp > 0) {
-      --sp;
-      const uint32_t m = stack_mask[sp] & cmp_le(V::load(stack_tnear[sp]), limit);
-      if (m == 0) continue;
-      cur = stack_ref[sp];
-      active = m;
-      return true;
-    }
-    return false;
   }
 
   WideView<N, W> bvh_;

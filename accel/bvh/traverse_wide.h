@@ -27,7 +27,9 @@
 // skipped. The triangle test's per-ray constants are computed at the first
 // leaf (many rays never reach one).
 #include <cfloat>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "accel/bvh/bvh_wide_node.h"
 #include "accel/core/hit_recorder.h"
@@ -210,6 +212,114 @@ template <int N, bool kExact>
   return cmp_le(tnear, tfar);
 }
 
+// The scalar counterpart of intersect_children (`bvh:simd=0`, the
+// algorithm-only comparison of issue 17): the same tree and walk with one
+// child box at a time, computing lane by lane what the vector test computes
+// (the same FMA or subtract-then-multiply, the same integer-order or NaN-
+// ignoring min/max, the same padding), so hits and counted work are equal.
+// Writes the entry distances to tnear[0, N).
+struct ScalarNodeRay {
+  float inv[3], near_shift[3], far_shift[3], org[3];
+  int near_off[3], far_off[3];
+
+  ScalarNodeRay() = default;
+  template <int N>
+  explicit ScalarNodeRay(const WideNodeRay<N>& r) {
+    alignas(64) float lanes[N];
+    for (int a = 0; a < 3; ++a) {
+      r.inv[a].store(lanes), inv[a] = lanes[0];
+      r.org[a].store(lanes), org[a] = lanes[0];
+#if defined(RAYLAB_SIMD_FMA)
+      r.near_shift[a].store(lanes), near_shift[a] = lanes[0];
+      r.far_shift[a].store(lanes), far_shift[a] = lanes[0];
+#else
+      near_shift[a] = far_shift[a] = 0.0f;
+#endif
+      near_off[a] = r.near_off[a];
+      far_off[a] = r.far_off[a];
+    }
+  }
+};
+
+namespace scalar_detail {
+inline int32_t bits_of(float x) {
+  int32_t i;
+  std::memcpy(&i, &x, sizeof i);
+  return i;
+}
+// As the vector forms: integer order of the bits, and x86 min/max (the
+// second operand when either is NaN).
+inline float min_bits(float a, float b) { return bits_of(a) < bits_of(b) ? a : b; }
+inline float max_bits(float a, float b) { return bits_of(a) > bits_of(b) ? a : b; }
+inline float min_x86(float a, float b) { return a < b ? a : b; }
+inline float max_x86(float a, float b) { return a > b ? a : b; }
+}  // namespace scalar_detail
+
+// GCC vectorises the loop over the children unless told not to: the scalar
+// variant must stay scalar to mean anything.
+#if defined(__GNUC__) && !defined(__clang__)
+#define RAYLAB_NO_VECTORIZE [[gnu::optimize("no-tree-vectorize", "no-tree-slp-vectorize")]]
+#else
+#define RAYLAB_NO_VECTORIZE
+#endif
+
+template <int N, bool kExact>
+RAYLAB_NO_VECTORIZE inline uint32_t intersect_children_scalar(const WideNode<N>& node, const ScalarNodeRay& r, float tmin, float tmax,
+                                          float* tnear) {
+  using namespace scalar_detail;
+  const float* b = &node.bounds[0][0];
+  uint32_t mask = 0;
+  for (int i = 0; i < N; ++i) {
+    float n[3], f[3];
+    bool hit;
+#if defined(RAYLAB_SIMD_FMA)
+    if constexpr (!kExact) {
+      for (int a = 0; a < 3; ++a) {
+        n[a] = std::fma(b[r.near_off[a] + i], r.inv[a], r.near_shift[a]);
+        f[a] = std::fma(b[r.far_off[a] + i], r.inv[a], r.far_shift[a]);
+      }
+      tnear[i] = max_bits(max_bits(n[0], n[1]), max_bits(n[2], tmin));
+      hit = tnear[i] <= min_bits(min_bits(f[0], f[1]), min_bits(f[2], tmax)) * kSlabFarScale;
+      mask |= static_cast<uint32_t>(hit) << i;
+      continue;
+    }
+#endif
+    for (int a = 0; a < 3; ++a) {
+      n[a] = (b[r.near_off[a] + i] - r.org[a]) * r.inv[a];
+      f[a] = (b[r.far_off[a] + i] - r.org[a]) * r.inv[a];
+    }
+    tnear[i] = max_x86(n[0], max_x86(n[1], max_x86(n[2], tmin)));
+    const float tfar0 = min_x86(f[0], min_x86(f[1], min_x86(f[2], tmax)));
+    hit = tnear[i] <= max_x86(tfar0 * kSlabFarScale, tfar0 * kSlabFarScaleNeg);
+    mask |= static_cast<uint32_t>(hit) << i;
+  }
+  return mask;
+}
+
+// The scalar leaf (`bvh:simd=0`): each distinct triangle of each block by
+// the scalar watertight test, which gives what the block test gives lane by
+// lane; the recorder's rule (least (t, prim)) makes the order irrelevant,
+// and any hit stops at the block's lowest hit lane, as the block test does.
+template <int W, typename Recorder>
+RAYLAB_NO_VECTORIZE inline bool intersect_leaf_scalar(const TriangleBlock<W>* blk, uint32_t nblocks, const WatertightRay& w, float tmin,
+                                  Recorder& rec) {
+  bool kept = false;
+  for (uint32_t b = 0; b < nblocks; ++b) {
+    const int count = blk[b].count();  // lanes [0, count) hold the distinct triangles
+    rec.count_triangles(static_cast<uint64_t>(count));
+    for (int lane = 0; lane < count; ++lane) {
+      const auto vertex = [&](int c) { return Vec3f(blk[b].v[c][0][lane], blk[b].v[c][1][lane], blk[b].v[c][2][lane]); };
+      float t, u, v;
+      if (!intersect_watertight(w, vertex(0), vertex(1), vertex(2), tmin, rec.tmax(), t, u, v)) continue;
+      if (rec.record(t, u, v, blk[b].prim[lane])) {
+        kept = true;
+        if constexpr (Recorder::kStopAtFirstHit) return true;
+      }
+    }
+  }
+  return kept;
+}
+
 // Prefetches what visiting `ref` will read first: a node's plane arrays, or a
 // leaf's first triangle block. Children are prefetched when pushed, so they
 // are (more likely) in cache when popped.
@@ -254,10 +364,12 @@ template <int N, int W>
 
 // The same for closest hit: two children are ordered by one comparison,
 // three or more sorted by distance (sort_network.h) and pushed so the
-// nearest is on top; returns the nearest.
-template <int N, int W>
-[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
-                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+// nearest is on top; returns the nearest. `refs` are the references pushed
+// (the node's children, or what the packet walk pushes in their place);
+// prefetch(slot) is called for every child pushed.
+template <int N, bool kScalar = false, typename Prefetch>
+[[gnu::always_inline]] inline uint32_t push_by_distance(const uint32_t* refs, uint32_t mask, simd::vfloat<N> tnear,
+                                                        uint64_t* stack, int& sp, Prefetch&& prefetch) {
   alignas(64) float dist[N];
   tnear.store(dist);
   const uint32_t i0 = simd::ctz(mask);
@@ -265,26 +377,26 @@ template <int N, int W>
   const uint32_t i1 = simd::ctz(rest);
   if ((rest & (rest - 1)) == 0) {
     // Two children: order their keys with min/max (no branch to mispredict).
-    const uint64_t k0 = child_key(dist[i0], child[i0]);
-    const uint64_t k1 = child_key(dist[i1], child[i1]);
-    prefetch_child(bvh, key_ref(std::max(k0, k1)));
+    const uint64_t k0 = child_key(dist[i0], refs[i0]);
+    const uint64_t k1 = child_key(dist[i1], refs[i1]);
+    prefetch(k0 > k1 ? i0 : i1);
     stack[sp++] = std::max(k0, k1);
     return key_ref(std::min(k0, k1));
   }
   // Three or more: sort by distance, push all but the nearest.
   const int k = simd::popcount(mask);
 #if defined(RAYLAB_SIMD_AVX512)
-  if constexpr (N == 8) {
+  if constexpr (N == 8 && !kScalar) {
     const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
     // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
     const __m512i keys = _mm512_or_si512(
         _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
-        _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(child)),
+        _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(refs)),
                                                              _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
     __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
     sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
     _mm512_storeu_si512(stack + sp, sorted);
-    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch_child(bvh, child[simd::ctz(m)]);
+    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
     sp += k - 1;
     return key_ref(stack[sp]);
   }
@@ -293,11 +405,18 @@ template <int N, int W>
   int n = 0;
   for (uint32_t m = mask; m != 0; m &= m - 1) {
     const uint32_t i = simd::ctz(m);
-    keys[n++] = child_key(dist[i], child[i]);
+    keys[n++] = child_key(dist[i], refs[i]);
   }
-  sort8_keys_descending(keys, n);
+  if constexpr (kScalar) sort_keys_descending(keys, n);  // keys are unique: the same order
+  else sort8_keys_descending(keys, n);
   sp += k - 1;
   return key_ref(stack[sp]);
+}
+
+template <int N, int W, bool kScalar = false>
+[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+  return push_by_distance<N, kScalar>(child, mask, tnear, stack, sp, [&](uint32_t i) { prefetch_child(bvh, child[i]); });
 }
 
 // Counting (kCount): a node visited is a child box tested, so an inner node
@@ -314,16 +433,26 @@ inline uint64_t count_children(const WideNode<N>& node) {
 // already hold a hit from elsewhere in the tree: the packet traversal hands
 // diverged rays over this way). Returns when the subtree is done or, any
 // hit, at the first hit.
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false>
 inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
   init_node_ray(nr, ray, kAxisParallel);
+  [[maybe_unused]] const ScalarNodeRay snr = [&] {
+    if constexpr (kScalar) return ScalarNodeRay(nr);
+    else return ScalarNodeRay{};
+  }();
   BlockRay<W> br{};  // filled at the first leaf
+  // The scalar leaf test's constants (kScalar only; the default ray's otherwise, unused).
+  [[maybe_unused]] const WatertightRay wr = [&] {
+    if constexpr (kScalar) return WatertightRay(ray);
+    else return WatertightRay(Ray());
+  }();
   bool br_ready = false;
   const float tmin = ray.tmin;
-  const V tmin_v = V::broadcast(tmin == 0.0f ? 0.0f : tmin);  // -0 as +0 for the integer-order min/max
+  const float tmin0 = tmin == 0.0f ? 0.0f : tmin;  // -0 as +0 for the integer-order min/max
+  const V tmin_v = V::broadcast(tmin0);
 
   alignas(64) uint64_t stack[kWideStackSize];
   int sp = 0;
@@ -351,7 +480,14 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
       const WideNode<N>& node = bvh.nodes[cur];
       if constexpr (kCount) rec.count_nodes(count_children(node));
       V tnear;
-      uint32_t mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
+      uint32_t mask;
+      if constexpr (kScalar) {
+        alignas(64) float tn[N];
+        mask = intersect_children_scalar<N, kExact>(node, snr, tmin0, rec.tmax(), tn);
+        tnear = V::load(tn);
+      } else {
+        mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
+      }
       if (mask == 0) {
         if (!pop()) return;
         continue;
@@ -364,39 +500,43 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
         continue;
       }
       cur = kAnyHit ? descend_any_hit(bvh, child, mask, stack, sp)
-                    : descend_closest(bvh, child, mask, tnear, stack, sp);
+                    : descend_closest<N, W, kScalar>(bvh, child, mask, tnear, stack, sp);
       continue;
     }
 
     // Leaf: test its triangle blocks.
-    if (!br_ready) {
+    if (!kScalar && !br_ready) {
       br.init(WatertightRay(ray));
       br_ready = true;
     }
-    if (intersect_block_leaf<W>(bvh.blocks + wide_ref::leaf_first(cur), wide_ref::leaf_blocks(cur), br, tmin, rec)) {
+    const TriangleBlock<W>* blocks = bvh.blocks + wide_ref::leaf_first(cur);
+    const bool kept = kScalar ? intersect_leaf_scalar<W>(blocks, wide_ref::leaf_blocks(cur), wr, tmin, rec)
+                              : intersect_block_leaf<W>(blocks, wide_ref::leaf_blocks(cur), br, tmin, rec);
+    if (kept) {
       if constexpr (kAnyHit) return;
     }
     if (!pop()) return;
   }
 }
 
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel>
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar>
 inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
-  walk_wide<N, W, kAnyHit, kCount, kAxisParallel>(bvh, ray, bvh.root_ref, rec);
+  walk_wide<N, W, kAnyHit, kCount, kAxisParallel, kScalar>(bvh, ray, bvh.root_ref, rec);
   return rec.hit();
 }
 
-// The traversal entry point: validity check, then the kernel for the ray's kind.
-template <int N, int W, bool kAnyHit, bool kCount>
+// The traversal entry point: validity check, then the kernel for the ray's
+// kind. kScalar: the scalar tests of `bvh:simd=0`.
+template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false>
 inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
   // The fast kernel needs finite reciprocals, tmin >= 0 (see
   // intersect_children) and an origin not far beyond the scene
   // (wide_fma_origin_limit); everything else takes the exact form.
   if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f) || origin_beyond(ray, bvh.fma_origin_limit)) [[unlikely]]
-    return traverse_wide_kernel<N, W, kAnyHit, kCount, true>(bvh, ray, stats);
-  return traverse_wide_kernel<N, W, kAnyHit, kCount, false>(bvh, ray, stats);
+    return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar>(bvh, ray, stats);
+  return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar>(bvh, ray, stats);
 }
 
 }  // namespace raylab

@@ -48,46 +48,27 @@ int assign_levels(Hgrid& g, double ratio, double scene_side, std::vector<uint8_t
   return top;
 }
 
-}  // namespace
-
-Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats& stats) {
-  Hgrid g;
-  g.ratio = opt.ratio;
-  g.neighbours = opt.neighbours;
-  const size_t n = mesh.num_triangles();
-  if (n >= (size_t{1} << 32) - 1) throw std::length_error("hgrid: more than 2^32 - 2 triangles");
-  g.tris = copy_leaf_triangles(mesh);
-  g.empty = n == 0;
-  if (g.empty) return g;
-
-  Vec3d lo, hi;
-  padded_grid_box(mesh.bounds(), lo, hi);
-  const double scene_side = (hi - lo).maxCoeff();
-  const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
-
-  std::vector<uint8_t> level;
-  const int top = assign_levels(g, opt.ratio, scene_side, level);
-
-  // Pass 1: each level's box of occupied cells, on the level's lattice from lo.
-  const bool pad = opt.neighbours == HgridNeighbours::Pad;
+// Pass 1: each level's box of occupied cells, on the level's lattice from lo,
+// then one DDA grid per occupied level. Returns each level's slot in g.levels
+// (-1: unoccupied).
+std::vector<int> make_level_grids(Hgrid& g, const std::vector<uint8_t>& level, int top, const Vec3d& lo,
+                                  double magnitude) {
+  const bool pad = g.neighbours == HgridNeighbours::Pad;
   std::vector<std::array<int64_t, 6>> box(top + 1, {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MIN, INT64_MIN, INT64_MIN});
-  auto cell_range = [&](size_t i, double cell, int a, int64_t& c0, int64_t& c1) {
+  for (size_t i = 0; i < g.tris.size(); ++i) {
+    const double cell = level_cell(g.finest_cell, g.ratio, level[i]);
     const LeafTriangle& t = g.tris[i];
-    const double mn = std::min({t.p0[a], t.p1[a], t.p2[a]}), mx = std::max({t.p0[a], t.p1[a], t.p2[a]});
-    if (pad) {
-      c0 = c1 = static_cast<int64_t>(std::floor((0.5 * (mn + mx) - lo[a]) / cell));
-    } else {
-      const double margin = kCellMarginRelative * cell + kCellMarginUlps * magnitude;
-      c0 = static_cast<int64_t>(std::floor((mn - margin - lo[a]) / cell));
-      c1 = static_cast<int64_t>(std::floor((mx + margin - lo[a]) / cell));
-    }
-  };
-  for (size_t i = 0; i < n; ++i) {
-    const double cell = level_cell(g.finest_cell, opt.ratio, level[i]);
     auto& b = box[level[i]];
     for (int a = 0; a < 3; ++a) {
+      const double mn = std::min({t.p0[a], t.p1[a], t.p2[a]}), mx = std::max({t.p0[a], t.p1[a], t.p2[a]});
       int64_t c0, c1;
-      cell_range(i, cell, a, c0, c1);
+      if (pad) {
+        c0 = c1 = static_cast<int64_t>(std::floor((0.5 * (mn + mx) - lo[a]) / cell));
+      } else {
+        const double margin = kCellMarginRelative * cell + kCellMarginUlps * magnitude;
+        c0 = static_cast<int64_t>(std::floor((mn - margin - lo[a]) / cell));
+        c1 = static_cast<int64_t>(std::floor((mx + margin - lo[a]) / cell));
+      }
       b[a] = std::min(b[a], c0 - (pad ? 1 : 0));
       b[3 + a] = std::max(b[3 + a], c1 + (pad ? 1 : 0));
     }
@@ -95,7 +76,7 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
   std::vector<int> slot_of_level(top + 1, -1);
   for (int l = 0; l <= top; ++l) {
     if (box[l][0] == INT64_MAX) continue;
-    const double cell = level_cell(g.finest_cell, opt.ratio, l);
+    const double cell = level_cell(g.finest_cell, g.ratio, l);
     double glo[3], cells[3] = {cell, cell, cell};
     int32_t res[3];
     for (int a = 0; a < 3; ++a) {
@@ -108,12 +89,17 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
     g.levels.push_back(HgridLevel{l, make_dda_grid_from_cells(glo, cells, res)});
     g.level_mask |= uint64_t{1} << l;
   }
+  return slot_of_level;
+}
 
-  // Pass 2: (key, triangle) for every cell a triangle is listed in, using the
-  // level grids' own coordinates (the walk's).
+// Pass 2: (key, triangle) for every cell a triangle is listed in, using the
+// level grids' own coordinates (the walk's), sorted by key.
+std::vector<std::pair<uint64_t, uint32_t>> cell_references(const Hgrid& g, const std::vector<uint8_t>& level,
+                                                           const std::vector<int>& slot_of_level) {
+  const bool pad = g.neighbours == HgridNeighbours::Pad;
   std::vector<std::pair<uint64_t, uint32_t>> pairs;
-  pairs.reserve(n * (pad ? 1 : 4));
-  for (size_t i = 0; i < n; ++i) {
+  pairs.reserve(g.tris.size() * (pad ? 1 : 4));
+  for (size_t i = 0; i < g.tris.size(); ++i) {
     const HgridLevel& L = g.levels[slot_of_level[level[i]]];
     const DdaGrid& dg = L.grid;
     const LeafTriangle& t = g.tris[i];
@@ -134,12 +120,11 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
           pairs.emplace_back(hgrid_key(L.level, dg.index(x, y, z)), static_cast<uint32_t>(i));
   }
   tbb::parallel_sort(pairs.begin(), pairs.end());
-  const auto key = [](const std::pair<uint64_t, uint32_t>& p) { return p.first; };
-  const size_t occupied = count_key_runs(pairs, key);
-  if (pairs.size() > UINT32_MAX) throw std::length_error("hgrid: more than 2^32 cell references");
-  const CellTableFigures table = fill_cell_table(
-      pairs, occupied, key, [](const std::pair<uint64_t, uint32_t>& p) { return p.second; }, g.cells, g.refs);
+  return pairs;
+}
 
+void report_hgrid_stats(const Hgrid& g, int top, size_t references, size_t occupied, const CellTableFigures& table,
+                        BuildStats& stats) {
   double walkable = 0.0;
   for (const HgridLevel& L : g.levels) walkable += static_cast<double>(L.grid.cells());
   stats.nodes = occupied;
@@ -150,11 +135,40 @@ Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats&
   stats.extra["occupied_levels"] = static_cast<double>(g.levels.size());
   stats.extra["level_span"] = static_cast<double>(top + 1);
   stats.extra["finest_cell"] = g.finest_cell;
-  stats.extra["references"] = static_cast<double>(pairs.size());
-  stats.extra["refs_per_triangle"] = static_cast<double>(pairs.size()) / static_cast<double>(n);
+  stats.extra["references"] = static_cast<double>(references);
+  stats.extra["refs_per_triangle"] = static_cast<double>(references) / static_cast<double>(g.tris.size());
   stats.extra["walkable_cells"] = walkable;
   stats.extra["max_cell_size"] = static_cast<double>(table.max_list);
   stats.extra["max_probes"] = static_cast<double>(table.max_probes);
+}
+
+}  // namespace
+
+Hgrid build_hgrid(const TriangleMesh& mesh, const HgridOptions& opt, BuildStats& stats) {
+  Hgrid g;
+  g.ratio = opt.ratio;
+  g.neighbours = opt.neighbours;
+  const size_t n = mesh.num_triangles();
+  if (n >= (size_t{1} << 32) - 1) throw std::length_error("hgrid: more than 2^32 - 2 triangles");
+  g.tris = copy_leaf_triangles(mesh);
+  g.empty = n == 0;
+  if (g.empty) return g;
+
+  Vec3d lo, hi;
+  padded_grid_box(mesh.bounds(), lo, hi);
+  const double scene_side = (hi - lo).maxCoeff();
+  const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+
+  std::vector<uint8_t> level;
+  const int top = assign_levels(g, opt.ratio, scene_side, level);
+  const std::vector<int> slot_of_level = make_level_grids(g, level, top, lo, magnitude);
+  const std::vector<std::pair<uint64_t, uint32_t>> pairs = cell_references(g, level, slot_of_level);
+  const auto key = [](const std::pair<uint64_t, uint32_t>& p) { return p.first; };
+  const size_t occupied = count_key_runs(pairs, key);
+  if (pairs.size() > UINT32_MAX) throw std::length_error("hgrid: more than 2^32 cell references");
+  const CellTableFigures table = fill_cell_table(
+      pairs, occupied, key, [](const std::pair<uint64_t, uint32_t>& p) { return p.second; }, g.cells, g.refs);
+  report_hgrid_stats(g, top, pairs.size(), occupied, table, stats);
   return g;
 }
 

@@ -32,6 +32,38 @@ class OctreeBuilder {
   void build(OctTmpNode& n, std::vector<uint32_t> ids, int level, const uint32_t c[3]) const {
     if (keep_as_leaf(n, ids, level, opt_.leaf, opt_.max_depth)) return;
     const uint32_t half = OctreeCube::span(level + 1);
+    std::array<std::vector<uint32_t>, 8> child_ids;
+    std::vector<uint32_t> stay;
+    distribute(ids, c, half, child_ids, stay);
+    const size_t total = ids.size();
+    if (!split_pays(child_ids, stay, total)) {
+      n.nonempty = true;
+      n.refs = std::move(ids);
+      return;
+    }
+    std::vector<uint32_t>().swap(ids);
+    n.refs = std::move(stay);
+    n.kids = std::make_unique<std::array<OctTmpNode, 8>>();
+    auto build_child = [&](uint32_t ch) {
+      const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
+                              c[2] + ((ch & 4u) ? half : 0u)};
+      build((*n.kids)[ch], std::move(child_ids[ch]), level + 1, cc);
+    };
+    if (total >= kParallelRefs) {
+      tbb::parallel_for(0u, 8u, [&](uint32_t ch) { build_child(ch); });
+    } else {
+      for (uint32_t ch = 0; ch < 8; ++ch) build_child(ch);
+    }
+    n.nonempty = !n.refs.empty();
+    for (const OctTmpNode& k : *n.kids) n.nonempty = n.nonempty || k.nonempty;
+  }
+
+ private:
+  // Sorts the node's triangles (cube corner c, children of side `half`) into
+  // the children they overlap (exact triangle-box test), or, with
+  // assign=straddle, keeps those that straddle a dividing plane in `stay`.
+  void distribute(const std::vector<uint32_t>& ids, const uint32_t c[3], uint32_t half,
+                  std::array<std::vector<uint32_t>, 8>& child_ids, std::vector<uint32_t>& stay) const {
     float mid[3];
     double lo[3][3];  // [axis][0 = low plane, 1 = mid plane, 2 = high plane]
     for (int k = 0; k < 3; ++k) {
@@ -40,8 +72,6 @@ class OctreeBuilder {
       lo[k][1] = mid[k];
       lo[k][2] = cube_.plane(k, c[k] + 2 * half);
     }
-    std::array<std::vector<uint32_t>, 8> child_ids;
-    std::vector<uint32_t> stay;
     for (const uint32_t id : ids) {
       const Aabb& b = boxes_[id];
       // Sides of each dividing plane the box touches (closed cells: a box
@@ -82,45 +112,27 @@ class OctreeBuilder {
       for (uint32_t ch = 0; ch < 8; ++ch)
         if (hits >> ch & 1u) child_ids[ch].push_back(id);
     }
-    const size_t total = ids.size();
-    // A split that multiplies the references (triangles meeting in a vertex
-    // or an edge, large triangles over a small cluster) buys nothing: keep
-    // the node as a leaf. Isolating a cluster (all references in one child)
-    // is progress and goes on.
-    size_t child_refs = 0;
-    for (const auto& c : child_ids) child_refs += c.size();
-    bool keep_leaf =
-        opt_.assign == OctreeAssign::Exact && static_cast<double>(child_refs) > opt_.max_growth * static_cast<double>(total);
-    if (opt_.sah && !keep_leaf) {
-      auto blocks = [](size_t refs) { return static_cast<double>((refs + kSahBlock - 1) / kSahBlock); };
-      double split_cost = 0.0;
-      for (const auto& c : child_ids) split_cost += 0.25 * blocks(c.size());
-      split_cost += opt_.ct + blocks(stay.size());
-      keep_leaf = !(split_cost < blocks(total));
-    }
-    if (keep_leaf) {
-      n.nonempty = true;
-      n.refs = std::move(ids);
-      return;
-    }
-    std::vector<uint32_t>().swap(ids);
-    n.refs = std::move(stay);
-    n.kids = std::make_unique<std::array<OctTmpNode, 8>>();
-    auto build_child = [&](uint32_t ch) {
-      const uint32_t cc[3] = {c[0] + ((ch & 1u) ? half : 0u), c[1] + ((ch & 2u) ? half : 0u),
-                              c[2] + ((ch & 4u) ? half : 0u)};
-      build((*n.kids)[ch], std::move(child_ids[ch]), level + 1, cc);
-    };
-    if (total >= kParallelRefs) {
-      tbb::parallel_for(0u, 8u, [&](uint32_t ch) { build_child(ch); });
-    } else {
-      for (uint32_t ch = 0; ch < 8; ++ch) build_child(ch);
-    }
-    n.nonempty = !n.refs.empty();
-    for (const OctTmpNode& k : *n.kids) n.nonempty = n.nonempty || k.nonempty;
   }
 
- private:
+  // Whether splitting a node of `total` references into these children pays.
+  // A split that multiplies the references (triangles meeting in a vertex or
+  // an edge, large triangles over a small cluster) buys nothing: the node
+  // stays a leaf. Isolating a cluster (all references in one child) is
+  // progress and goes on. With term=sah the split must also lower the cost.
+  bool split_pays(const std::array<std::vector<uint32_t>, 8>& child_ids, const std::vector<uint32_t>& stay,
+                  size_t total) const {
+    size_t child_refs = 0;
+    for (const auto& c : child_ids) child_refs += c.size();
+    if (opt_.assign == OctreeAssign::Exact && static_cast<double>(child_refs) > opt_.max_growth * static_cast<double>(total))
+      return false;
+    if (!opt_.sah) return true;
+    auto blocks = [](size_t refs) { return static_cast<double>((refs + kSahBlock - 1) / kSahBlock); };
+    double split_cost = 0.0;
+    for (const auto& c : child_ids) split_cost += 0.25 * blocks(c.size());
+    split_cost += opt_.ct + blocks(stay.size());
+    return split_cost < blocks(total);
+  }
+
   const TriangleMesh& mesh_;
   OctreeBuildOptions opt_;
   OctreeCube cube_;
