@@ -42,32 +42,27 @@ inline int dominant_axis(const Vec3f& d) {
   return (ad.x() >= ad.y()) ? (ad.x() >= ad.z() ? 0 : 2) : (ad.y() >= ad.z() ? 1 : 2);
 }
 
-// Least and greatest lane of a 16-lane vector.
-inline float lanes_min(simd::vfloat<kPacketSize> x) {
+// Least (kMax false) or greatest lane of a 16-lane vector.
+template <bool kMax>
+inline float lanes_extreme(simd::vfloat<kPacketSize> x) {
 #if defined(RAYLAB_SIMD_AVX512)
   // Halving (zero-masking extracts: see vfloat<16> on GCC 12's warnings).
-  const __m256 h = _mm256_min_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
-  const __m128 q = _mm_min_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
-  const __m128 e = _mm_min_ps(q, _mm_movehl_ps(q, q));
-  return _mm_cvtss_f32(_mm_min_ss(e, _mm_movehdup_ps(e)));
+  const auto pick = [](auto a, auto b) {
+    if constexpr (sizeof(a) == 32) return kMax ? _mm256_max_ps(a, b) : _mm256_min_ps(a, b);
+    else return kMax ? _mm_max_ps(a, b) : _mm_min_ps(a, b);
+  };
+  const __m256 h = pick(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
+  const __m128 q = pick(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+  const __m128 e = pick(q, _mm_movehl_ps(q, q));
+  return _mm_cvtss_f32(pick(e, _mm_movehdup_ps(e)));
 #else
   alignas(64) float f[kPacketSize];
   x.store(f);
-  return *std::min_element(f, f + kPacketSize);
+  return kMax ? *std::max_element(f, f + kPacketSize) : *std::min_element(f, f + kPacketSize);
 #endif
 }
-inline float lanes_max(simd::vfloat<kPacketSize> x) {
-#if defined(RAYLAB_SIMD_AVX512)
-  const __m256 h = _mm256_max_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
-  const __m128 q = _mm_max_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
-  const __m128 e = _mm_max_ps(q, _mm_movehl_ps(q, q));
-  return _mm_cvtss_f32(_mm_max_ss(e, _mm_movehdup_ps(e)));
-#else
-  alignas(64) float f[kPacketSize];
-  x.store(f);
-  return *std::max_element(f, f + kPacketSize);
-#endif
-}
+inline float lanes_min(simd::vfloat<kPacketSize> x) { return lanes_extreme<false>(x); }
+inline float lanes_max(simd::vfloat<kPacketSize> x) { return lanes_extreme<true>(x); }
 
 // 16 rays in structure-of-arrays form.
 struct PacketInput {
