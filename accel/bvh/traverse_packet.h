@@ -147,7 +147,7 @@ struct PacketHits {
   alignas(64) uint32_t prim[kPacketSize];
 
   // The greatest closest-hit bound over the lanes.
-  float greatest_t() const { return *std::max_element(t, t + kPacketSize); }
+  float greatest_t() const { return lanes_max(simd::vfloat<kPacketSize>::load(t)); }
 };
 
 // L lanes of a packet's hits from lane `first` on (L = 16, or 8 when a leaf
