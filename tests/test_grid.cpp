@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "accel/grid/cell_clearance.h"
 #include "accel/grid/cell_overlap.h"
 #include "accel/grid/dda.h"
 #include "accel/grid/grid_resolution.h"
@@ -391,6 +392,74 @@ TEST(Dda, RandomRaysVisitEveryCellTheyCross) {
   }
 }
 
+TEST(Dda, ClearanceIsTheChessboardDistanceToTheNearestOccupiedCell) {
+  const DdaGrid g = make_dda_grid(Vec3d(0, 0, 0), Vec3d(1, 1, 1), GridRes{17, 9, 12});
+  Pcg32 rng(4, 9);
+  std::vector<uint8_t> occupied(g.cells());
+  for (auto& o : occupied) o = rng.uniform() < 0.01f;
+  const std::vector<uint8_t> d = cell_clearance(g, [&](int64_t c) { return occupied[c] != 0; });
+  ASSERT_EQ(d.size(), g.cells());
+  for (int64_t c = 0; c < static_cast<int64_t>(g.cells()); ++c) {
+    const auto [x, y, z] = coords(g, c);
+    int best = kMaxClearance;
+    for (int64_t o = 0; o < static_cast<int64_t>(g.cells()); ++o) {
+      if (!occupied[o]) continue;
+      const auto [ox, oy, oz] = coords(g, o);
+      best = std::min(best, std::max({std::abs(ox - x), std::abs(oy - y), std::abs(oz - z)}));
+    }
+    ASSERT_EQ(d[c], best) << x << " " << y << " " << z;
+  }
+  // No occupied cell at all: every cell has the cap.
+  const std::vector<uint8_t> none = cell_clearance(g, [](int64_t) { return false; });
+  EXPECT_TRUE(std::all_of(none.begin(), none.end(), [](uint8_t v) { return v == kMaxClearance; }));
+}
+
+TEST(Dda, SkippingWalkVisitsTheSameOccupiedCellsInOrder) {
+  // Sparse occupancy: long empty stretches to jump over, and occupied cells
+  // the walk must not jump past.
+  const DdaGrid g = make_dda_grid(Vec3d(-1, 0, 2), Vec3d(2, 1, 2.5), GridRes{40, 23, 17});
+  Pcg32 rng(8, 1);
+  std::vector<uint8_t> occupied(g.cells());
+  for (auto& o : occupied) o = rng.uniform() < 0.004f;
+  const std::vector<uint8_t> clearance = cell_clearance(g, [&](int64_t c) { return occupied[c] != 0; });
+  size_t jumps = 0, plain_visits = 0, skipping_visits = 0;
+  for (int i = 0; i < 3000; ++i) {
+    // Half from inside the grid's box, half from around it.
+    const float s = i % 2 ? 1.0f : 0.0f;
+    const Vec3f org(-1 - s + (3 + 2 * s) * rng.uniform(), -s + (1 + 2 * s) * rng.uniform(),
+                    2 - s + (0.5f + 2 * s) * rng.uniform());
+    Vec3f dir = test::random_direction(rng);
+    if (i % 5 == 0) dir[i % 3] = (i % 2) ? 0.0f : -0.0f;
+    if (dir.squaredNorm() == 0) continue;
+    const Ray r(org, dir);
+    const DdaRay dr(r);
+    double t0 = r.tmin, t1 = r.tmax;
+    if (!dda_clip(dr, g.lo, g.hi, t0, t1)) continue;
+    std::vector<Visit> plain, skipping;
+    dda_walk(g, dr, t0, t1, [&](int64_t c, double te, double tx) {
+      if (occupied[c]) plain.push_back({c, te, tx});
+      ++plain_visits;
+      return false;
+    });
+    double last_exit = t0;
+    dda_walk_skipping(g, dr, t0, t1, [&](int64_t c) { return clearance[c]; }, [&](int64_t c, double te, double tx) {
+      EXPECT_GE(te, last_exit - 1e-12) << "ray " << i;  // never backwards
+      jumps += te > last_exit + 1e-12;
+      last_exit = tx;
+      if (occupied[c]) skipping.push_back({c, te, tx});
+      ++skipping_visits;
+      return false;
+    });
+    ASSERT_EQ(plain.size(), skipping.size()) << "ray " << i;
+    for (size_t k = 0; k < plain.size(); ++k) {
+      EXPECT_EQ(plain[k].cell, skipping[k].cell) << "ray " << i;
+      EXPECT_NEAR(plain[k].t_exit, skipping[k].t_exit, 1e-9) << "ray " << i;
+    }
+  }
+  EXPECT_GT(jumps, 1500u);
+  EXPECT_LT(skipping_visits, plain_visits / 2);
+}
+
 // ---------------------------------------------------------------------------
 // Accelerators against brute force
 
@@ -698,8 +767,9 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
   };
   std::vector<Figures> dense, hashed;
   for (const char* density : {"1", "8", "64", "512"}) {
-    dense.push_back(figures(std::string("grid:density=") + density));
-    hashed.push_back(figures(std::string("hashgrid:density=") + density));
+    // The scalar layout (simd=0): ids into one copy of each triangle.
+    dense.push_back(figures(std::string("grid:simd=0,skip=0,density=") + density));
+    hashed.push_back(figures(std::string("hashgrid:simd=0,density=") + density));
     const Figures& d = dense.back();
     const Figures& h = hashed.back();
     EXPECT_EQ(d.cells, h.cells) << density;
@@ -709,6 +779,8 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
     // occupied cell (16-byte slots, load factor 1/2) and 4 per reference.
     EXPECT_EQ(d.bytes, 4.0 * (d.cells + 1) + 4.0 * d.refs + sizeof(UniformGrid)) << density;
     EXPECT_EQ(h.bytes, 32.0 * h.occupied + 4.0 * h.refs + sizeof(HashGrid)) << density;
+    // Empty-space skipping (the default): one more byte per cell.
+    EXPECT_EQ(figures(std::string("grid:simd=0,density=") + density).bytes, d.bytes + d.cells) << density;
   }
   // From density 1 to 512 the dense grid grows with its cells (512x), the
   // hashed grid with its occupied cells (~70x here: the room's walls).
@@ -716,12 +788,33 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
   EXPECT_LT(hashed[3].bytes / hashed[0].bytes, 100.0);
   EXPECT_LT(hashed[3].occupied, 0.05 * hashed[3].cells);
   EXPECT_LT(hashed[3].bytes, 0.5 * dense[3].bytes);
+  // SIMD blocks (the default): each cell's list as ceil(n / 4) 160-byte
+  // blocks in place of its ids, and no triangle copies.
+  for (const char* spec : {"grid", "hashgrid", "grid2"}) {
+    auto ids = make_accelerator(std::string(spec) + ":simd=0");
+    auto blocks = make_accelerator(spec);
+    const BuildStats si = ids->build(m), sb = blocks->build(m);
+    const double cell_blocks = sb.extra.at("cell_blocks");
+    EXPECT_EQ(si.extra.at("cell_blocks"), 0.0) << spec;
+    EXPECT_GE(cell_blocks, sb.extra.at("refs") / 4.0) << spec;
+    // At most 3 padding lanes per run: the non-empty cells, and grid2's top cells' large lists.
+    const double runs = sb.extra.at("nonempty_cells") + (sb.extra.count("top_cells") ? sb.extra.at("top_cells") : 0.0);
+    EXPECT_LE(cell_blocks, (sb.extra.at("refs") + 3.0 * runs) / 4.0) << spec;
+    EXPECT_EQ(static_cast<double>(sb.bytes),
+              static_cast<double>(si.bytes) - 4.0 * sb.extra.at("refs") - m.num_triangles() * sizeof(LeafTriangle) +
+                  cell_blocks * sizeof(KdTriangleBlock))
+        << spec;
+  }
 }
 
 TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
   const test::NamedMesh s = test::soup(20000, 5, 1.0f);
-  for (const auto& spec : {"grid:density=64,budget=0.5", "hashgrid:density=64,budget=0.5",
-                           "grid2:density=64,budget=0.5", "grid:res=1000x1000x1000,budget=1"}) {
+  // simd=0: ids (4 bytes per reference); the default SIMD blocks take at
+  // least 40 bytes per reference, so their budgets are larger.
+  for (const auto& spec : {"grid:simd=0,density=64,budget=0.5", "hashgrid:simd=0,density=64,budget=0.5",
+                           "grid2:simd=0,density=64,budget=0.5", "grid:simd=0,res=1000x1000x1000,budget=1",
+                           "grid:density=64,budget=4", "hashgrid:density=64,budget=4", "grid2:density=64,budget=4",
+                           "grid:res=1000x1000x1000,budget=8"}) {
     auto a = make_accelerator(spec);
     testing::internal::CaptureStderr();
     const BuildStats st = a->build(s.mesh);
@@ -729,7 +822,7 @@ TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
     EXPECT_NE(err.find("warning"), std::string::npos) << spec;
     EXPECT_NE(err.find("budget"), std::string::npos) << spec;
     EXPECT_EQ(st.extra.at("budget_capped"), 1.0) << spec;
-    const double budget = std::string(spec).find("budget=1") != std::string::npos ? 1.0 : 0.5;
+    const double budget = std::stod(std::string(spec).substr(std::string(spec).find("budget=") + 7));
     EXPECT_LE(static_cast<double>(st.bytes - s.mesh.num_triangles() * sizeof(LeafTriangle)),
               budget * 1024 * 1024 * 1.05)
         << spec;

@@ -5,6 +5,7 @@
 #include "accel/bsp/build_bsp.h"
 #include "accel/bsp/convex_polytope.h"
 #include "accel/bsp/traverse_bsp.h"
+#include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/core/view_accelerator.h"
 #include "accel/core/tree_stats.h"
@@ -40,7 +41,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
     BspTree tree = build_bsp(mesh, opt_, &bs);
     BspPackedTree packed = pack_bsp_nodes(tree.nodes);
     tree.nodes = {};
-    nodes_ = std::move(packed.nodes);
+    nodes_.assign(packed.nodes.begin(), packed.nodes.end());
     planes_ = std::move(packed.planes);
     tris_.clear();
     ids_.clear();
@@ -111,11 +112,11 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
   }
 
   BspDirectionTable directions_;
-  std::vector<BspPackedNode> nodes_;
+  HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
   std::vector<BspPlane> planes_;
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
-  std::vector<KdTriangleBlock> blocks_;  // C++17 aligned new honours the 32-byte alignment
+  HugePageVector<KdTriangleBlock> blocks_;
 };
 
 }  // namespace
@@ -130,7 +131,7 @@ AcceleratorInfo bsp_accelerator_info() {
        {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
        {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
         integer_in(2, 64).or_number(0)},
-       sah_traversal_cost_param(),
+       sah_traversal_cost_param("", kKdDefaultTraversalCost),  // the k-d tree's (same SIMD leaf blocks)
        sah_intersection_cost_param(),
        depth_limit_param(kBspMaxDepthLimit)},
       [](const Params& p) -> std::unique_ptr<Accelerator> {

@@ -6,8 +6,14 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
+#include <fmt/format.h>
+
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 #include "accel/bsp/convex_polytope.h"
 #include "accel/core/sah_report.h"
@@ -25,6 +31,8 @@ constexpr uint32_t kKindTriangle = 6;  // build-time only: a triangle's plane (s
 constexpr size_t kExactlyPricedCandidates = 4;
 // Nodes from which the two subtrees are built as parallel tasks.
 constexpr size_t kParallelTaskSize = 1024;
+// Nodes whose event lists are split direction by direction in parallel.
+constexpr size_t kParallelEventSplit = 65536;
 
 struct TmpNode {
   uint32_t kind = kBspLeaf;
@@ -162,26 +170,58 @@ struct AreaEstimate {
 
 // Sweep events along one direction, in the k-d tree's order at equal
 // positions (Wald & Havran 2006): ends, then planar, then starts. An event
-// is one integer (the float's bits mapped to an order-preserving unsigned
-// key, then the type), so sorting compares integers.
+// is one integer: the float's bits mapped to an order-preserving unsigned
+// key (upper 32 bits), the type (2 bits), and the index of its reference in
+// the node's RefSet (30 bits), so sorting compares integers.
 constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
-inline uint64_t make_event(float pos, uint32_t type) {
+constexpr int kRefBits = 30;
+constexpr uint64_t kRefMask = (uint64_t{1} << kRefBits) - 1;
+inline uint64_t make_event(float pos, uint32_t type, uint32_t ref) {
   const uint32_t b = std::bit_cast<uint32_t>(pos == 0.0f ? 0.0f : pos);  // -0 sorts as +0
   const uint32_t key = (b & 0x80000000u) ? ~b : (b | 0x80000000u);
-  return (static_cast<uint64_t>(key) << 2) | type;
+  return (static_cast<uint64_t>(key) << 32) | (static_cast<uint64_t>(type) << kRefBits) | ref;
 }
+inline uint64_t event_group(uint64_t e) { return e >> 32; }  // events at one position
 inline float event_pos(uint64_t e) {
-  const uint32_t key = static_cast<uint32_t>(e >> 2);
+  const uint32_t key = static_cast<uint32_t>(e >> 32);
   return std::bit_cast<float>((key & 0x80000000u) ? (key & 0x7fffffffu) : ~key);
 }
-inline uint32_t event_type(uint64_t e) { return static_cast<uint32_t>(e & 3u); }
+inline uint32_t event_type(uint64_t e) { return static_cast<uint32_t>(e >> kRefBits) & 3u; }
+inline uint32_t event_ref(uint64_t e) { return static_cast<uint32_t>(e & kRefMask); }
+
+// A reference's events along one direction, from its projected extent
+// rounded outward to float, so that a plane at an event's position has the
+// reference exactly on the side the sweep counts it.
+inline void push_extent_events(std::vector<uint64_t>& ev, double lo, double hi, uint32_t ref) {
+  const float flo = float_down(lo), fhi = float_up(hi);
+  if (flo == fhi) {
+    ev.push_back(make_event(flo, kPlanar, ref));
+  } else {
+    ev.push_back(make_event(flo, kStart, ref));
+    ev.push_back(make_event(fhi, kEnd, ref));
+  }
+}
+
+// The sorted events of a node's references along each fixed direction (the
+// first `directions` are used). Computed and sorted once at the root, then
+// split in order between the children, as the k-d tree's builder does with
+// its three axes (Wald & Havran 2006): only references cut by a plane get
+// new events, sorted and merged in, so no node sorts all its events and the
+// build is O(N log N) for a tree of bounded straddling.
+using EventLists = std::array<std::vector<uint64_t>, 13>;
 
 // Per-thread working memory of find_split (no task switch happens inside).
 struct Scratch {
-  std::vector<uint64_t> events;
   std::vector<double> lo_s, hi_s;  // per direction and reference: projected extent
   std::vector<uint32_t> hist_min, hist_max;
   std::vector<Vec3d> corners;
+};
+
+// Per-thread working memory of partition.
+struct PartitionScratch {
+  std::vector<uint8_t> side;
+  std::vector<uint32_t> new_index;
+  EventLists fresh_left, fresh_right;
 };
 
 // Clipped polygons longer than this keep their parent's polygon (unclipped,
@@ -214,7 +254,18 @@ class Builder {
     return r;
   }
 
-  std::unique_ptr<TmpNode> build(RefSet refs, Region region, int depth) const {
+  // The root's sorted event lists (none with `bins`: the binned search
+  // projects each node's references instead).
+  EventLists root_events(const RefSet& refs) const {
+    EventLists ev;
+    if (!sweeps()) return ev;
+    for (int di = 0; di < opt_.directions; ++di) ev[di].reserve(2 * refs.size());
+    for (size_t i = 0; i < refs.size(); ++i) add_ref_events(refs, i, static_cast<uint32_t>(i), ev);
+    tbb::parallel_for(0, opt_.directions, [&](int di) { tbb::parallel_sort(ev[di].begin(), ev[di].end()); });
+    return ev;
+  }
+
+  std::unique_ptr<TmpNode> build(RefSet refs, EventLists ev, Region region, int depth) const {
     auto node = std::make_unique<TmpNode>();
     node->area = region.area();
     const size_t n = refs.size();
@@ -222,18 +273,20 @@ class Builder {
     // testing every triangle, at the depth limit, or in a region without area.
     const double leaf_cost = opt_.intersection_cost * static_cast<double>(n);
     Candidate best;
-    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(refs, region, node->area, leaf_cost);
+    if (n > 0 && depth < depth_limit_ && node->area > 0) best = find_split(refs, ev, region, node->area, leaf_cost);
     if (!(best.cost < leaf_cost)) {
       node->ids = std::move(refs.ids);
       return node;
     }
     RefSet left, right;
-    partition(refs, best.n, best.d, left, right);
+    EventLists left_ev, right_ev;
+    partition(refs, ev, best.n, best.d, left, right, left_ev, right_ev);
     if (left.size() == n && right.size() == n) {  // no progress (cannot happen with a counted candidate)
       node->ids = std::move(refs.ids);
       return node;
     }
     refs = RefSet{};
+    ev = EventLists{};
     node->kind = best.kind;
     node->direction = best.direction;
     node->n = best.n;
@@ -241,11 +294,12 @@ class Builder {
     auto parts = region.split(best.kind, best.n, best.d);
     region = Region{};
     if (n >= kParallelTaskSize) {
-      tbb::parallel_invoke([&] { node->child[0] = build(std::move(left), std::move(parts.first), depth + 1); },
-                           [&] { node->child[1] = build(std::move(right), std::move(parts.second), depth + 1); });
+      tbb::parallel_invoke(
+          [&] { node->child[0] = build(std::move(left), std::move(left_ev), std::move(parts.first), depth + 1); },
+          [&] { node->child[1] = build(std::move(right), std::move(right_ev), std::move(parts.second), depth + 1); });
     } else {
-      node->child[0] = build(std::move(left), std::move(parts.first), depth + 1);
-      node->child[1] = build(std::move(right), std::move(parts.second), depth + 1);
+      node->child[0] = build(std::move(left), std::move(left_ev), std::move(parts.first), depth + 1);
+      node->child[1] = build(std::move(right), std::move(right_ev), std::move(parts.second), depth + 1);
     }
     return node;
   }
@@ -267,10 +321,28 @@ class Builder {
   bool goes_below(double smin, double smax) const { return smax <= tol_ || smin < -tol_; }
   bool goes_above(double, double smax) const { return smax > tol_; }
 
-  void partition(const RefSet& refs, const Vec3f& nf, float df, RefSet& left, RefSet& right) const {
+  // Splits the references by the plane (a straddling one gets its part on
+  // each side) and, when sweeping, the event lists (see EventLists): events
+  // of references kept whole are copied in order with their new indices
+  // (which grow in the parent's order, so the order is kept), and the parts
+  // of straddling references get fresh events, sorted and merged in.
+  void partition(const RefSet& refs, const EventLists& ev, const Vec3f& nf, float df, RefSet& left, RefSet& right,
+                 EventLists& left_ev, EventLists& right_ev) const {
     const Vec3d n = nf.cast<double>();
     const double d = df;
     Vec3d below[kMaxClippedVertices], above[kMaxClippedVertices];
+    // Per reference: the side it goes to whole (kBoth: cut) and its index
+    // there. Per-thread working memory: no task switch happens in here (the
+    // parallel split below is isolated).
+    constexpr uint8_t kBoth = 0, kLeftOnly = 1, kRightOnly = 2;
+    static thread_local PartitionScratch sc;
+    std::vector<uint8_t>& side = sc.side;
+    std::vector<uint32_t>& new_index = sc.new_index;
+    EventLists& fresh_left = sc.fresh_left;
+    EventLists& fresh_right = sc.fresh_right;
+    side.resize(refs.size());
+    new_index.resize(refs.size());
+    for (int di = 0; di < opt_.directions; ++di) fresh_left[di].clear(), fresh_right[di].clear();
     for (size_t i = 0; i < refs.size(); ++i) {
       double smin, smax;
       side_range(refs, i, n, d, smin, smax);
@@ -279,10 +351,13 @@ class Builder {
       const size_t k = refs.start[i + 1] - refs.start[i];
       const bool b = goes_below(smin, smax), a = goes_above(smin, smax);
       if (b && !a) {
+        side[i] = kLeftOnly, new_index[i] = static_cast<uint32_t>(left.size());
         left.add(id, p, k);
       } else if (a && !b) {
+        side[i] = kRightOnly, new_index[i] = static_cast<uint32_t>(right.size());
         right.add(id, p, k);
       } else {
+        side[i] = kBoth;
         // Straddles: each side gets its part (vertices within tol count as on the plane).
         size_t nb = 0, na = 0;
         bool overflow = false;
@@ -308,8 +383,57 @@ class Builder {
           left.add(id, below, nb);
           right.add(id, above, na);
         }
+        if (sweeps()) {
+          add_ref_events(left, left.size() - 1, static_cast<uint32_t>(left.size() - 1), fresh_left);
+          add_ref_events(right, right.size() - 1, static_cast<uint32_t>(right.size() - 1), fresh_right);
+        }
       }
     }
+    if (!sweeps()) return;
+    auto split_direction = [&](int di) {
+      std::vector<uint64_t>& l = left_ev[di];
+      std::vector<uint64_t>& r = right_ev[di];
+      l.reserve(2 * left.size());  // at most two events per reference
+      r.reserve(2 * right.size());
+      for (const uint64_t e : ev[di]) {
+        const uint32_t ref = event_ref(e);
+        const uint64_t renamed = (e & ~kRefMask) | new_index[ref];
+        if (side[ref] == kLeftOnly) l.push_back(renamed);
+        else if (side[ref] == kRightOnly) r.push_back(renamed);
+      }
+      for (auto [dst, fresh] : {std::pair{&l, &fresh_left[di]}, std::pair{&r, &fresh_right[di]}}) {
+        std::sort(fresh->begin(), fresh->end());
+        const auto mid = static_cast<std::ptrdiff_t>(dst->size());
+        dst->insert(dst->end(), fresh->begin(), fresh->end());
+        std::inplace_merge(dst->begin(), dst->begin() + mid, dst->end());
+      }
+    };
+    if (refs.size() >= kParallelEventSplit) {
+      tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, opt_.directions, split_direction); });
+    } else {
+      for (int di = 0; di < opt_.directions; ++di) split_direction(di);
+    }
+  }
+
+  bool sweeps() const { return opt_.bins < 2; }
+
+  // Projected extent of a polygon along the first `dirs` fixed directions.
+  void extents(const Vec3d* p, size_t k, int dirs, double* lo, double* hi) const {
+    std::fill(lo, lo + dirs, std::numeric_limits<double>::infinity());
+    std::fill(hi, hi + dirs, -std::numeric_limits<double>::infinity());
+    for (size_t j = 0; j < k; ++j)
+      for (int di = 0; di < dirs; ++di) {
+        const double x = frames_[di].u.dot(p[j]);
+        lo[di] = std::min(lo[di], x);
+        hi[di] = std::max(hi[di], x);
+      }
+  }
+
+  // The events of reference i of `refs` (named `ref` in them) along every direction swept.
+  void add_ref_events(const RefSet& refs, size_t i, uint32_t ref, EventLists& ev) const {
+    double lo[13], hi[13];
+    extents(refs.pts.data() + refs.start[i], refs.start[i + 1] - refs.start[i], opt_.directions, lo, hi);
+    for (int di = 0; di < opt_.directions; ++di) push_extent_events(ev[di], lo[di], hi[di], ref);
   }
 
   // The candidates of one node: the best exactly priced one so far (axis
@@ -364,55 +488,30 @@ class Builder {
   }
 
   // Projected extents of every reference along the first `dirs` fixed
-  // directions, in one pass over the clipped polygons:
-  // sc.lo_s[di * n + i], sc.hi_s[di * n + i].
+  // directions (the binned search's input): sc.lo_s[di * n + i], sc.hi_s[di * n + i].
   void project(Scratch& sc, const RefSet& refs, int dirs) const {
     const size_t n = refs.size();
     sc.lo_s.resize(dirs * n);
     sc.hi_s.resize(dirs * n);
     for (size_t i = 0; i < n; ++i) {
       double lo[13], hi[13];
-      std::fill(lo, lo + dirs, std::numeric_limits<double>::infinity());
-      std::fill(hi, hi + dirs, -std::numeric_limits<double>::infinity());
-      for (uint32_t k = refs.start[i]; k < refs.start[i + 1]; ++k) {
-        const Vec3d& p = refs.pts[k];
-        for (int di = 0; di < dirs; ++di) {
-          const double x = frames_[di].u.dot(p);
-          lo[di] = std::min(lo[di], x);
-          hi[di] = std::max(hi[di], x);
-        }
-      }
+      extents(refs.pts.data() + refs.start[i], refs.start[i + 1] - refs.start[i], dirs, lo, hi);
       for (int di = 0; di < dirs; ++di) sc.lo_s[di * n + i] = lo[di], sc.hi_s[di * n + i] = hi[di];
     }
   }
 
   // Exact sweep over one direction's sorted events (Wald & Havran 2006 with
   // the BSP side rule: a reference lying in the plane goes below).
-  void sweep_direction(Search& s, Scratch& sc, size_t n, int di, const AreaEstimate& est, bool is_exact) const {
+  void sweep_direction(Search& s, const std::vector<uint64_t>& ev, size_t n, int di, const AreaEstimate& est,
+                       bool is_exact) const {
     const Vec3f uf = bsp_fixed_directions()[di];
     const uint32_t kind = di < 3 ? static_cast<uint32_t>(di) : kKindKdop;
-    std::vector<uint64_t>& ev = sc.events;
-    ev.clear();
-    const double* lo_s = sc.lo_s.data() + di * n;
-    const double* hi_s = sc.hi_s.data() + di * n;
-    for (size_t i = 0; i < n; ++i) {
-      // Outward to float, so that a plane at an event's position has the
-      // reference exactly on the side the sweep counts it.
-      const float flo = float_down(lo_s[i]), fhi = float_up(hi_s[i]);
-      if (flo == fhi) {
-        ev.push_back(make_event(flo, kPlanar));
-      } else {
-        ev.push_back(make_event(flo, kStart));
-        ev.push_back(make_event(fhi, kEnd));
-      }
-    }
-    std::sort(ev.begin(), ev.end());
     size_t nl = 0, nr = n;
     for (size_t i = 0; i < ev.size();) {
-      const uint64_t group = ev[i] >> 2;
+      const uint64_t group = event_group(ev[i]);
       const float p = event_pos(ev[i]);
       size_t count[3] = {0, 0, 0};
-      for (; i < ev.size() && (ev[i] >> 2) == group; ++i) ++count[event_type(ev[i])];
+      for (; i < ev.size() && event_group(ev[i]) == group; ++i) ++count[event_type(ev[i])];
       nr -= count[kPlanar] + count[kEnd];
       nl += count[kPlanar];
       // Only planes strictly inside the region cut it.
@@ -482,7 +581,8 @@ class Builder {
   // plane's frame (exact for axis planes of a box region, as in the k-d
   // tree); the cheapest estimated ones are then priced with the exact areas
   // of the two child polytopes (Ize et al.'s SAH), one clip each.
-  Candidate find_split(const RefSet& refs, const Region& region, double area, double leaf_cost) const {
+  Candidate find_split(const RefSet& refs, const EventLists& ev, const Region& region, double area,
+                       double leaf_cost) const {
     static thread_local Scratch sc;
     Search s;
     s.exact.cost = leaf_cost;
@@ -490,13 +590,13 @@ class Builder {
     s.ct = opt_.traversal_cost;
     s.lambda_empty = 1.0 - static_cast<double>(opt_.empty_bonus);
     region.corners(sc.corners);
-    project(sc, refs, opt_.directions);
+    if (!sweeps()) project(sc, refs, opt_.directions);
     for (int di = 0; di < opt_.directions; ++di) {
       const AreaEstimate est(sc.corners, frames_[di]);
       if (!(est.hi > est.lo)) continue;  // flat along this direction
       const bool is_exact = region.is_box && di < 3;
-      if (opt_.bins >= 2) bin_direction(s, sc, s.n, di, est, is_exact);
-      else sweep_direction(s, sc, s.n, di, est, is_exact);
+      if (sweeps()) sweep_direction(s, ev[di], s.n, di, est, is_exact);
+      else bin_direction(s, sc, s.n, di, est, is_exact);
     }
     triangle_planes(s, sc, refs);
     const double ci = opt_.intersection_cost;
@@ -571,7 +671,12 @@ BspTree build_bsp(const TriangleMesh& mesh, const BspBuildOptions& options, BspB
   Region root;  // an empty mesh: a point (area 0, one leaf)
   if (n > 0) root.lo = out.bounds.lo.cast<double>(), root.hi = out.bounds.hi.cast<double>();
   // A flat scene box has zero volume; its faces still give the SAH an area.
-  const std::unique_ptr<TmpNode> tree = b.build(b.root_refs(), std::move(root), 0);
+  // Event entries name a node's references in 30 bits (a node holds at
+  // most about 1.5 N references: see the straddling guard in offer()).
+  if (n > (size_t{1} << 29)) throw std::length_error(fmt::format("bsp: {} triangles, at most 2^29 supported", n));
+  RefSet refs = b.root_refs();
+  EventLists events = b.root_events(refs);
+  const std::unique_ptr<TmpNode> tree = b.build(std::move(refs), std::move(events), std::move(root), 0);
   out.nodes.resize(1);
   flatten(*tree, 0, 0, out, s, tree->area > 0 ? tree->area : 1.0);
   if (stats) *stats = s;

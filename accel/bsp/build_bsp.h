@@ -37,10 +37,15 @@
 // scene's magnitude; the traversal's margins are orders of magnitude wider,
 // so a triangle that meets a leaf's region is always found there.
 //
-// Cost: O(n log n (directions) + n triangle_planes) per node of n
-// references plus a constant number of polytope clips, so O(N log^2 N) for
-// a balanced tree; the depth is capped like the k-d tree's (8 + 1.3 log2 N,
-// at most 64).
+// Cost: the events along each fixed direction are sorted once, at the root,
+// and split in order between the children (Wald & Havran's presorted event
+// lists, generalised from 3 axes to the swept directions); only the parts of
+// straddling references get new events, sorted and merged in. A node of n
+// references then costs O(n (directions + triangle_planes)) plus
+// O(s log s) for its s straddling references and a constant number of
+// polytope clips, so O(N log N) for a balanced tree (measured in
+// docs/bsp-hybrid.md); the depth is capped like the k-d tree's
+// (8 + 1.3 log2 N, at most 64).
 #include <cstddef>
 
 #include "accel/bsp/bsp_node.h"

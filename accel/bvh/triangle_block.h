@@ -148,6 +148,29 @@ template <int W>
   return mask;
 }
 
+// One block tested on [tmin, rec.tmax()]: its nearest hit (any hit: the
+// first lane hit) offered to the recorder; true when it was kept. The
+// caller counts the block's triangle tests.
+template <int W, typename Recorder>
+[[gnu::always_inline]] inline bool intersect_block_record(const TriangleBlock<W>& blk, const BlockRay<W>& br, float tmin,
+                                                          Recorder& rec) {
+  BlockHits<W> bh;
+  uint32_t m = intersect_block<W>(blk, br, tmin, rec.tmax(), bh);
+  if (m == 0) return false;
+  uint32_t best = simd::ctz(m);
+  float bt = bh.t[best];
+  if constexpr (!Recorder::kStopAtFirstHit) {
+    for (m &= m - 1; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      if (bh.t[i] < bt || (bh.t[i] == bt && blk.prim[i] < blk.prim[best])) {  // ties: see HitRecorder
+        bt = bh.t[i];
+        best = i;
+      }
+    }
+  }
+  return rec.record(bt, bh.u[best], bh.v[best], blk.prim[best]);
+}
+
 // The wide BVH's leaf function: tests a leaf's blocks on [tmin, rec.tmax()]
 // and offers each block's nearest hit to the recorder (any hit: the first
 // lane hit). True when a hit was kept.
@@ -157,21 +180,7 @@ template <int W, typename Recorder>
   bool kept = false;
   for (uint32_t b = 0; b < nblocks; ++b) {
     rec.count_triangles(static_cast<uint64_t>(blk[b].count()));
-    BlockHits<W> bh;
-    uint32_t m = intersect_block<W>(blk[b], br, tmin, rec.tmax(), bh);
-    if (m == 0) continue;
-    uint32_t best = simd::ctz(m);
-    float bt = bh.t[best];
-    if constexpr (!Recorder::kStopAtFirstHit) {
-      for (m &= m - 1; m != 0; m &= m - 1) {
-        const uint32_t i = simd::ctz(m);
-        if (bh.t[i] < bt || (bh.t[i] == bt && blk[b].prim[i] < blk[b].prim[best])) {  // ties: see HitRecorder
-          bt = bh.t[i];
-          best = i;
-        }
-      }
-    }
-    if (rec.record(bt, bh.u[best], bh.v[best], blk[b].prim[best])) {
+    if (intersect_block_record<W>(blk[b], br, tmin, rec)) {
       kept = true;
       if constexpr (Recorder::kStopAtFirstHit) return true;
     }

@@ -62,8 +62,10 @@ inline std::vector<StatInfo> tree_stat_infos(const std::string& references, cons
 
 // The SAH constants a builder steers by (its K_T and K_I; the reported cost
 // uses accel/core/sah_report.h's), declared with their ranges in one place.
-inline ParamInfo sah_traversal_cost_param(const char* restriction = "") {
-  return ParamInfo{"ct", "15", std::string(restriction) + "SAH cost of a traversal step (K_T)", real_in(0, 1e6)};
+// The default K_T is Wald & Havran's 15 (with K_I = 20, for scalar triangle
+// tests); trees with 4-wide SIMD leaf blocks declare their own (see kdtree).
+inline ParamInfo sah_traversal_cost_param(const char* restriction = "", const char* default_value = "15") {
+  return ParamInfo{"ct", default_value, std::string(restriction) + "SAH cost of a traversal step (K_T)", real_in(0, 1e6)};
 }
 inline ParamInfo sah_intersection_cost_param(const char* restriction = "") {
   return ParamInfo{"ci", "20", std::string(restriction) + "SAH cost of a triangle test (K_I)",

@@ -10,6 +10,7 @@
 #include <tbb/parallel_scan.h>
 #include <tbb/parallel_sort.h>
 
+#include "accel/grid/cell_blocks.h"
 #include "accel/grid/cell_overlap.h"
 #include "accel/grid/exclusive_scan.h"
 #include "accel/grid/grid_build_start.h"
@@ -54,6 +55,17 @@ bool count_pairs(const DdaGrid& g, AssignMode mode, std::span<const LeafTriangle
   return true;
 }
 
+// The SIMD blocks the cells of pairs sorted by key need (cell_blocks.h).
+template <typename KeyOf>
+uint64_t blocks_of_key_runs(const std::vector<KeyRef>& pairs, KeyOf key) {
+  uint64_t blocks = 0;
+  for (size_t i = 0, j = 0; i < pairs.size(); i = j) {
+    for (j = i + 1; j < pairs.size() && key(pairs[j]) == key(pairs[i]);) ++j;
+    blocks += kd_leaf_blocks(static_cast<uint32_t>(j - i));
+  }
+  return blocks;
+}
+
 }  // namespace
 
 HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, BuildStats& stats) {
@@ -67,7 +79,10 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
   ChosenResolution chosen = start.first_resolution(opt, max_cells);
   // The build's peak: the (key, id) pairs, the references and the table
   // (32 bytes per occupied cell) must fit the budget.
-  const uint64_t max_refs = std::min<uint64_t>(start.budget / (sizeof(KeyRef) + sizeof(uint32_t)), UINT32_MAX);
+  // With SIMD blocks, the blocks too (at least 40 bytes per reference).
+  const uint64_t max_refs =
+      std::min<uint64_t>(start.budget / (sizeof(KeyRef) + sizeof(uint32_t) + (opt.leaf_blocks() ? reference_bytes(true) : 0)),
+                         UINT32_MAX);
 
   const auto key_of = [](const KeyRef& p) { return p.key; };
   std::vector<uint64_t> first;
@@ -92,7 +107,8 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
       tbb::parallel_sort(pairs.begin(), pairs.end());
       // Runs of equal keys -> occupied cells.
       occupied = count_key_runs(pairs, key_of);
-      const uint64_t peak = pairs.size() * (sizeof(KeyRef) + sizeof(uint32_t)) + 2 * occupied * sizeof(CellSlot);
+      uint64_t peak = pairs.size() * (sizeof(KeyRef) + sizeof(uint32_t)) + 2 * occupied * sizeof(CellSlot);
+      if (opt.leaf_blocks()) peak += blocks_of_key_runs(pairs, key_of) * sizeof(KdTriangleBlock);
       if (peak <= start.budget) break;
     }
     std::vector<KeyRef>().swap(pairs);
@@ -115,8 +131,24 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
   stats.extra["hash_max_probes"] = table.max_probes;
   stats.max_depth = 1;
   stats.avg_depth = 1.0;
+  if (opt.leaf_blocks()) {
+    std::vector<uint32_t> starts;
+    starts.reserve(occupied);
+    for (const CellSlot& slot : g.table.slots())
+      if (slot.key != CellHashTable::kEmptyKey) starts.push_back(slot.begin);
+    CellBlocks cb = to_cell_blocks(mesh, g.refs, starts);
+    g.table.remap_runs([&](uint32_t& begin, uint32_t& count) {
+      const uint32_t first = cb.block_at[begin];
+      count = cb.block_at[begin + count] - first;
+      begin = first;
+    });
+    g.blocks = std::move(cb.blocks);
+    std::vector<uint32_t>().swap(g.refs);
+    std::vector<LeafTriangle>().swap(g.tris);
+  }
+  stats.extra["cell_blocks"] = static_cast<double>(g.blocks.size());
   stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle) +
-                sizeof(HashGrid);
+                g.blocks.capacity() * sizeof(KdTriangleBlock) + sizeof(HashGrid);
   return g;
 }
 

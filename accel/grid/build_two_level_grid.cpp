@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/grid/cell_blocks.h"
 #include "accel/grid/cell_lists.h"
 #include "accel/grid/grid_build_start.h"
 #include "accel/grid/grid_stats.h"
@@ -38,7 +39,9 @@ struct SubGridPlan {
 // Splits the top cell's triangles into large and small, and boxes the small
 // ones: their bounds clipped to the cell (enlarged by the top grid's
 // assignment margin, as the assignment was), then padded like a grid box.
-void plan_box(const DdaGrid& top, std::span<const LeafTriangle> tris, std::span<const uint32_t> ids,
+// `whole_cell` (sub=cell, the published rule): every triangle is small and
+// the box is the whole (enlarged) cell.
+void plan_box(const DdaGrid& top, std::span<const LeafTriangle> tris, std::span<const uint32_t> ids, bool whole_cell,
               SubGridPlan& p) {
   const int64_t cell = p.top_cell;
   const int64_t c[3] = {cell % top.res[0], (cell / top.res[0]) % top.res[1],
@@ -51,7 +54,12 @@ void plan_box(const DdaGrid& top, std::span<const LeafTriangle> tris, std::span<
   }
   Vec3d blo = Vec3d::Constant(std::numeric_limits<double>::infinity());
   Vec3d bhi = -blo;
-  for (const uint32_t id : ids) {
+  if (whole_cell) {
+    p.small.assign(ids.begin(), ids.end());
+    blo = cell_lo;
+    bhi = cell_hi;
+  }
+  for (const uint32_t id : whole_cell ? std::span<const uint32_t>() : ids) {
     const LeafTriangle& t = tris[id];
     Vec3d tlo = t.p0.cast<double>().cwiseMin(t.p1.cast<double>()).cwiseMin(t.p2.cast<double>());
     Vec3d thi = t.p0.cast<double>().cwiseMax(t.p1.cast<double>()).cwiseMax(t.p2.cast<double>());
@@ -115,10 +123,14 @@ double bbox_refs(const SubGridPlan& p, std::span<const LeafTriangle> tris) {
 }
 
 // The n^(1/3) rule for the top cell's triangles, coarsened when they are
-// large compared with the cells.
-void size_subgrid(SubGridPlan& p, double lambda, std::span<const LeafTriangle> tris) {
+// large compared with the cells (not with the published rule, sub=cell).
+void size_subgrid(SubGridPlan& p, double lambda, bool whole_cell, std::span<const LeafTriangle> tris) {
   if (p.small.empty()) return;  // no sub-grid: res stays 0
   const double n = static_cast<double>(p.small.size());
+  if (whole_cell) {
+    set_resolution(p, resolution_by_density(p.extent, n, lambda));
+    return;
+  }
   const double limit = kMaxBboxRefsPerTriangle * std::max(1.0, lambda) * n;
   for (double l = lambda;; l *= 0.5) {
     const GridRes res = resolution_by_density(p.extent, n, l);
@@ -158,7 +170,7 @@ ChosenResolution build_top_level(const GridBuildStart& start, const GridOptions&
 
 // Per non-empty top cell: its large triangles, and the box of the part of
 // the cell its small triangles occupy.
-std::vector<SubGridPlan> plan_top_cells(const TwoLevelGrid& g, const CellLists& top_lists) {
+std::vector<SubGridPlan> plan_top_cells(const TwoLevelGrid& g, const CellLists& top_lists, bool whole_cell) {
   std::vector<SubGridPlan> plans;
   for (uint32_t c = 0; c + 1 < top_lists.offsets.size(); ++c) {
     if (top_lists.offsets[c + 1] == top_lists.offsets[c]) continue;
@@ -170,7 +182,7 @@ std::vector<SubGridPlan> plan_top_cells(const TwoLevelGrid& g, const CellLists& 
       const uint32_t c = plans[k].top_cell;
       const std::span<const uint32_t> ids(top_lists.refs.data() + top_lists.offsets[c],
                                           top_lists.offsets[c + 1] - top_lists.offsets[c]);
-      plan_box(g.top, g.tris, ids, plans[k]);
+      plan_box(g.top, g.tris, ids, whole_cell, plans[k]);
     }
   });
   return plans;
@@ -185,7 +197,7 @@ double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, con
   lists.assign(plans.size(), CellLists{});
   while (true) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t k = r.begin(); k < r.end(); ++k) size_subgrid(plans[k], lambda, g.tris);
+      for (size_t k = r.begin(); k < r.end(); ++k) size_subgrid(plans[k], lambda, opt.whole_cell_subgrids, g.tris);
     });
     uint64_t sub_offsets = 0;
     for (const auto& p : plans)
@@ -198,7 +210,7 @@ double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, con
       capped = true;
       continue;
     }
-    const uint64_t ref_limit = (budget - fixed) / sizeof(uint32_t);
+    const uint64_t ref_limit = (budget - fixed) / reference_bytes(opt.leaf_blocks());
     std::atomic<uint64_t> refs{0};
     std::atomic<bool> over{false};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, plans.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -210,6 +222,11 @@ double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, con
           over = true;
       }
     });
+    if (!over && opt.leaf_blocks()) {
+      uint64_t blocks = 0;
+      for (const CellLists& l : lists) blocks += blocks_of_runs(l.offsets);
+      over = blocks * sizeof(KdTriangleBlock) > budget - fixed;
+    }
     if (!over) return lambda;
     if (lambda < 1e-9) throw budget_error(opt, n);
     lambda /= 2;
@@ -292,6 +309,25 @@ void add_two_level_stats(const TwoLevelGrid& g, const ChosenResolution& top, siz
                 g.tris.capacity() * sizeof(LeafTriangle) + sizeof(TwoLevelGrid);
 }
 
+// The cells' references as SIMD blocks (cell_blocks.h): every run (a top
+// cell's large triangles, a sub-grid cell's list) becomes a run of blocks.
+void to_blocks(const TriangleMesh& mesh, TwoLevelGrid& g, BuildStats& stats) {
+  std::vector<uint32_t> starts(g.offsets);
+  for (const TopCellContent& c : g.contents) starts.push_back(c.large_begin);
+  CellBlocks cb = to_cell_blocks(mesh, g.refs, starts);
+  for (uint32_t& o : g.offsets) o = cb.block_at[o];
+  for (TopCellContent& c : g.contents) {
+    const uint32_t first = cb.block_at[c.large_begin];
+    c.large_count = cb.block_at[c.large_begin + c.large_count] - first;
+    c.large_begin = first;
+  }
+  stats.bytes += cb.blocks.capacity() * sizeof(KdTriangleBlock);
+  stats.bytes -= g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle);
+  g.blocks = std::move(cb.blocks);
+  std::vector<uint32_t>().swap(g.refs);
+  std::vector<LeafTriangle>().swap(g.tris);
+}
+
 }  // namespace
 
 // The final structure (top cells, sub-grid records, sub-grid cells and
@@ -303,11 +339,14 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
   const size_t n = start.triangles;
   CellLists top_lists;
   const ChosenResolution top = build_top_level(start, opt, g, top_lists);
-  std::vector<SubGridPlan> plans = plan_top_cells(g, top_lists);
-  uint64_t large_refs = 0;
-  for (const auto& p : plans) large_refs += p.large.size();
+  std::vector<SubGridPlan> plans = plan_top_cells(g, top_lists, opt.whole_cell_subgrids);
+  uint64_t large_refs = 0, large_blocks = 0;
+  for (const auto& p : plans) {
+    large_refs += p.large.size();
+    large_blocks += kd_leaf_blocks(static_cast<uint32_t>(p.large.size()));
+  }
   const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(TopCellContent) +
-                             large_refs * sizeof(uint32_t);
+                             (opt.leaf_blocks() ? large_blocks * sizeof(KdTriangleBlock) : large_refs * sizeof(uint32_t));
   if (top_bytes >= start.budget) throw budget_error(opt, n);
   bool sub_capped = false;
   std::vector<CellLists> lists;
@@ -319,6 +358,8 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
   }
   concatenate_levels(top, plans, lists, g);
   add_two_level_stats(g, top, top_lists.refs.size(), large_refs, lambda, top.capped || sub_capped, opt, n, stats);
+  if (opt.leaf_blocks()) to_blocks(mesh, g, stats);
+  stats.extra["cell_blocks"] = static_cast<double>(g.blocks.size());
   return g;
 }
 

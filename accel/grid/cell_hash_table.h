@@ -61,6 +61,14 @@ class CellHashTable {
     }
   }
 
+  // Rewrites every stored cell's run (begin, count) through f(begin, count)
+  // (the cells' references turned into SIMD blocks, cell_blocks.h).
+  template <typename F>
+  void remap_runs(F&& f) {
+    for (CellSlot& s : slots_)
+      if (s.key != kEmptyKey) f(s.begin, s.count);
+  }
+
   size_t capacity() const { return slots_.size(); }
   // Every slot, free ones with key kEmptyKey (for pictures and checks, not traversal).
   const std::vector<CellSlot>& slots() const { return slots_; }

@@ -6,6 +6,10 @@
 //                 a warning on stderr instead of failing to allocate
 //   assign=exact  exact triangle/box overlap (SAT), or bbox
 //   tri=watertight triangle test (watertight or mt)
+//   simd=1        cells' triangles as 4-wide SIMD blocks (watertight test
+//                 only); 0 keeps the scalar kernels (same hits and counts)
+//   skip=1        (grid) empty-space skipping by each cell's distance to the
+//                 nearest occupied cell
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -26,6 +30,14 @@ struct GridOptions {
   AssignMode assign = AssignMode::Exact;
   TriangleTest test = TriangleTest::Watertight;
   double top_density = 1.0 / 16.0;  // two-level grid only
+  bool simd = true;
+  bool skip = false;  // dense `grid` only: empty-space skipping (cell_clearance.h)
+  // grid2 only: sub=cell, each sub-grid covers its whole top cell and all of
+  // its triangles (Kalojanov, Billeter & Slusallek 2011); else sub=fit.
+  bool whole_cell_subgrids = false;
+
+  // Cells stored as SIMD triangle blocks (cell_blocks.h).
+  bool leaf_blocks() const { return simd && test == TriangleTest::Watertight; }
 
   uint64_t budget_bytes() const { return static_cast<uint64_t>(budget_mib * 1024.0 * 1024.0); }
 };

@@ -13,16 +13,24 @@
 // the next cell. This is also what makes mailboxing safe: a triangle skipped
 // by the mailbox has already had its hit recorded.
 #include <cstdint>
+#include <type_traits>
 
+#include "accel/bvh/triangle_block.h"
 #include "accel/core/hit_recorder.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda.h"
 #include "accel/grid/mailbox.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
-template <TriangleTest kTest, typename Recorder>
+// kBlocks: the grid's cells hold 4-wide SIMD triangle blocks (cell_blocks.h,
+// simd=1 with the watertight test) instead of ids into triangle copies.
+template <TriangleTest kTest, typename Recorder, bool kBlocks = false>
 struct GridRayQuery {
+  static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD blocks run the watertight test");
+  struct NoBlockRay {};
   const Ray& ray;
   TrianglePrecompute<kTest> pre;
   RayMailbox mailbox;
@@ -30,8 +38,11 @@ struct GridRayQuery {
   // in this one object (measured: a reference to an outer recorder costs
   // the grids 5-20 %).
   Recorder rec;
+  [[no_unique_address]] std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, NoBlockRay> block_ray;
 
-  GridRayQuery(const Ray& r, TraversalStats* stats) : ray(r), pre(r), rec(r, stats) {}
+  GridRayQuery(const Ray& r, TraversalStats* stats) : ray(r), pre(r), rec(r, stats) {
+    if constexpr (kBlocks) block_ray.init(pre.w);
+  }
 
   // Tests the triangles ids[0..count) not yet tested by this ray. Returns
   // true when the recorder stops at the first hit and one was found.
@@ -46,32 +57,62 @@ struct GridRayQuery {
     return false;
   }
 
+  // The same for a cell stored as `count` blocks: a block whose triangles
+  // were all tested is skipped; one with a new triangle is tested whole (a
+  // triangle tested again gives the same (t, id), which the recorder does
+  // not take twice) and counts its new triangles, as the scalar walk does.
+  bool test_cell(const KdTriangleBlock* blocks, uint32_t count) {
+    for (uint32_t b = 0; b < count; ++b) {
+      const uint32_t fresh = mailbox.fresh(blocks[b].prim);
+      if (fresh == 0) continue;
+      rec.count_triangles(fresh);
+      if (intersect_block_record<kKdBlockWidth>(blocks[b], block_ray, ray.tmin, rec)) {
+        if constexpr (Recorder::kStopAtFirstHit) return true;
+      }
+    }
+    return false;
+  }
+
+  // A cell's run [begin, begin + count) of a grid view with `refs` and
+  // `tris` (ids) or `blocks` (kBlocks: begin and count in blocks).
+  template <typename View>
+  [[gnu::always_inline]] bool test_run(const View& g, uint32_t begin, uint32_t count) {
+    if constexpr (kBlocks) return test_cell(g.blocks + begin, count);
+    else return test_cell(g.refs + begin, count, g.tris);
+  }
+
   // Closest hit: true once the best hit lies within [.., t_exit].
   bool done_at(double t_exit) const { return rec.found() && static_cast<double>(rec.hit().t) <= t_exit; }
 
-  // One cell entered by the walk: test its list, then apply the stopping rule.
-  bool visit_cell(const uint32_t* ids, uint32_t count, const LeafTriangle* tris, double t_exit) {
-    if (test_cell(ids, count, tris)) return true;
+  // One cell entered by the walk: test its run, then apply the stopping rule.
+  template <typename View>
+  [[gnu::always_inline]] bool visit_run(const View& g, uint32_t begin, uint32_t count, double t_exit) {
+    if (test_run(g, begin, count)) return true;
     if constexpr (Recorder::kStopAtFirstHit) return false;
     return done_at(t_exit);
   }
 };
 
-// A single-level grid as its walk sees it; `Cells` finds a cell's list of
-// references (dense compressed rows, or a hash table of occupied cells).
+// A single-level grid as its walk sees it; `Cells` finds a cell's run of
+// references (dense compressed rows, or a hash table of occupied cells):
+// ids into `tris`, or with `blocks` (cell_blocks.h) blocks.
 template <typename Cells>
 struct SingleLevelGridView {
   DdaGrid dda;
   Cells cells;
   const uint32_t* refs = nullptr;
   const LeafTriangle* tris = nullptr;
+  const KdTriangleBlock* blocks = nullptr;  // set when the cells are SIMD blocks
+  // Per cell, the distance to the nearest occupied cell (cell_clearance.h),
+  // when the walk skips empty space.
+  const uint8_t* clearance = nullptr;
   bool empty = true;
 };
 
 // The frame of every grid walk: the recorder, the validity check, the ray
 // clipped to the grid's box; `walk(dr, t0, t1, query)` then walks the cells
 // of [t0, t1] and the recorder's hit is the answer.
-template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Walk>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, typename Walk>
 [[gnu::always_inline]] inline Hit walk_grid(const DdaGrid& grid, bool empty, const Ray& ray, TraversalStats* stats,
                                             Walk&& walk) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
@@ -80,22 +121,39 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Walk>
   const DdaRay dr(ray);
   double t0 = ray.tmin, t1 = ray.tmax;
   if (!dda_clip(dr, grid.lo, grid.hi, t0, t1)) return Recorder(ray, stats).hit();
-  GridRayQuery<kTest, Recorder> q(ray, stats);
+  GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
   walk(dr, t0, t1, q);
   return q.rec.hit();
 }
 
 // Closest-hit / any-hit walk of a single-level grid: the cells of the
 // 3D-DDA (dda.h), each non-empty cell's triangles tested (mailboxed), the
-// stopping rule above.
+// stopping rule above; with a clearance per cell, empty cubes are crossed
+// in one jump (dda_walk_skipping), and a cell's clearance says whether it
+// is empty before its list is looked up.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Cells>
 inline Hit traverse_grid(const SingleLevelGridView<Cells>& g, const Ray& ray, TraversalStats* stats) {
-  return walk_grid<kTest, kAnyHit, kCount>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
-    dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double, double t_exit) {
-      q.rec.count_nodes(1);
-      uint32_t begin, count;
-      if (!g.cells.find(cell, begin, count)) return false;
-      return q.visit_cell(g.refs + begin, count, g.tris, t_exit);
+  return walk_with_leaf_blocks<kTest>(g, [&]<bool kBlocks>() {
+    return walk_grid<kTest, kAnyHit, kCount, kBlocks>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
+                                                                                    double t1, auto& q) {
+      const auto visit = [&](int64_t cell, double, double t_exit) __attribute__((always_inline)) {
+        q.rec.count_nodes(1);
+        uint32_t begin, count;
+        if (!g.cells.find(cell, begin, count)) return false;
+        return q.visit_run(g, begin, count, t_exit);
+      };
+      if (g.clearance) {
+        dda_walk_skipping(g.dda, dr, t0, t1, [&](int64_t cell) { return g.clearance[cell]; },
+                          [&](int64_t cell, double t_enter, double t_exit) __attribute__((always_inline)) {
+                            if (g.clearance[cell] != 0) {
+                              q.rec.count_nodes(1);
+                              return false;
+                            }
+                            return visit(cell, t_enter, t_exit);
+                          });
+      } else {
+        dda_walk(g.dda, dr, t0, t1, visit);
+      }
     });
   });
 }

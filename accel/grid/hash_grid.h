@@ -16,14 +16,18 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
 struct HashGrid {
   DdaGrid dda;
+  // With SIMD blocks (options.leaf_blocks()) a slot's begin and count are in
+  // blocks, and refs and tris are empty.
   CellHashTable table;
   std::vector<uint32_t> refs;  // triangle ids, grouped by occupied cell
   std::vector<LeafTriangle> tris;
+  std::vector<KdTriangleBlock> blocks;
   bool empty = true;
 };
 

@@ -30,6 +30,17 @@ class RayMailbox {
     return false;
   }
 
+  // How many of a SIMD block's triangles (lanes past the first repeat
+  // prim[0]: padding) were not yet tested by this ray; records them. The
+  // same seen() calls, in the same order, as the scalar walk of the block's
+  // ids, so both walks skip (and count) the same triangles.
+  template <int W>
+  uint32_t fresh(const uint32_t (&prim)[W]) {
+    uint32_t n = seen(prim[0]) ? 0 : 1;
+    for (int i = 1; i < W && prim[i] != prim[0]; ++i) n += seen(prim[i]) ? 0 : 1;
+    return n;
+  }
+
  private:
   uint32_t slots_[kSlots];
 };

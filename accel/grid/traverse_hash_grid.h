@@ -23,7 +23,8 @@ struct HashedCells {
 using HashGridView = SingleLevelGridView<HashedCells>;
 
 inline HashGridView grid_view(const HashGrid& g) {
-  return HashGridView{g.dda, HashedCells{&g.table}, g.refs.data(), g.tris.data(), g.empty};
+  return HashGridView{g.dda,   HashedCells{&g.table}, g.refs.data(), g.tris.data(), g.blocks.empty() ? nullptr : g.blocks.data(),
+                      nullptr, g.empty};
 }
 
 }  // namespace raylab

@@ -22,16 +22,18 @@ struct TwoLevelGridView {
   const uint32_t* offsets = nullptr;
   const uint32_t* refs = nullptr;
   const LeafTriangle* tris = nullptr;
+  const KdTriangleBlock* blocks = nullptr;  // set when the cells are SIMD blocks
   bool empty = true;
 };
 
 inline TwoLevelGridView grid_view(const TwoLevelGrid& g) {
-  return TwoLevelGridView{g.top,           g.top_cells.data(), g.contents.data(), g.offsets.data(),
-                          g.refs.data(),   g.tris.data(),      g.empty};
+  return TwoLevelGridView{g.top,         g.top_cells.data(), g.contents.data(),
+                          g.offsets.data(), g.refs.data(),  g.tris.data(),
+                          g.blocks.empty() ? nullptr : g.blocks.data(), g.empty};
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks>
+inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
   if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
   const DdaRay dr(ray);
@@ -39,7 +41,7 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
   if (!dda_clip(dr, g.top.lo, g.top.hi, t0, t1)) return Recorder(ray, stats).hit();
   // Not through walk_grid: one lambda less around the nested walks keeps
   // them inlined (measured 12 % faster on the bunny).
-  GridRayQuery<kTest, Recorder> q(ray, stats);
+  GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
   Recorder& rec = q.rec;
   {
     // always_inline: GCC otherwise keeps this lambda (the whole per-cell
@@ -49,8 +51,8 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
       const uint32_t k = g.top_cells[top_cell];
       if (k == kEmptyTopCell) return false;
       const TopCellContent& content = g.contents[k];
-      if (!content.has_subgrid()) return q.visit_cell(g.refs + content.large_begin, content.large_count, g.tris, t_exit);
-      if (content.large_count != 0 && q.test_cell(g.refs + content.large_begin, content.large_count, g.tris)) return true;
+      if (!content.has_subgrid()) return q.visit_run(g, content.large_begin, content.large_count, t_exit);
+      if (content.large_count != 0 && q.test_run(g, content.large_begin, content.large_count)) return true;
       const DdaGrid sub_dda = content.dda();
       double s0 = t_enter, s1 = t_exit < rec.tmax() ? t_exit : static_cast<double>(rec.tmax());
       if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
@@ -59,7 +61,7 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
           rec.count_nodes(1);
           const uint32_t begin = offsets[cell], end = offsets[cell + 1];
           if (begin == end) return false;
-          return q.visit_cell(g.refs + begin, end - begin, g.tris, cell_exit);
+          return q.visit_run(g, begin, end - begin, cell_exit);
         });
         if (stop) return true;
       }
@@ -68,6 +70,12 @@ inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalSta
     });
   }
   return rec.hit();
+}
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
+  return walk_with_leaf_blocks<kTest>(
+      g, [&]<bool kBlocks>() { return traverse_two_level_grid<kTest, kAnyHit, kCount, kBlocks>(g, ray, stats); });
 }
 
 }  // namespace raylab

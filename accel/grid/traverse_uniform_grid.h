@@ -1,6 +1,6 @@
 #pragma once
 // The dense uniform grid as its walk sees it: every cell's list in
-// compressed rows (offsets[cell] .. offsets[cell + 1] in refs).
+// compressed rows (offsets[cell] .. offsets[cell + 1] in refs, or in blocks).
 #include <cstdint>
 
 #include "accel/grid/grid_ray_query.h"
@@ -21,7 +21,13 @@ struct DenseCells {
 using UniformGridView = SingleLevelGridView<DenseCells>;
 
 inline UniformGridView grid_view(const UniformGrid& g) {
-  return UniformGridView{g.dda, DenseCells{g.lists.offsets.data()}, g.lists.refs.data(), g.tris.data(), g.empty};
+  return UniformGridView{g.dda,
+                         DenseCells{g.lists.offsets.data()},
+                         g.lists.refs.data(),
+                         g.tris.data(),
+                         g.blocks.empty() ? nullptr : g.blocks.data(),
+                         g.clearance.empty() ? nullptr : g.clearance.data(),
+                         g.empty};
 }
 
 }  // namespace raylab

@@ -29,6 +29,7 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
@@ -57,6 +58,9 @@ struct TwoLevelGrid {
   std::vector<uint32_t> offsets;
   std::vector<uint32_t> refs;
   std::vector<LeafTriangle> tris;
+  // With SIMD blocks (options.leaf_blocks()) offsets, large_begin and
+  // large_count count blocks, and refs and tris are empty.
+  std::vector<KdTriangleBlock> blocks;
   bool empty = true;
 };
 

@@ -9,13 +9,20 @@
 #include "accel/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
+#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
 struct UniformGrid {
   DdaGrid dda;
+  // With SIMD blocks (options.leaf_blocks()) the offsets count blocks, and
+  // refs and tris are empty.
   CellLists lists;
   std::vector<LeafTriangle> tris;
+  std::vector<KdTriangleBlock> blocks;
+  // With empty-space skipping (skip=1): per cell the distance to the nearest
+  // occupied cell (cell_clearance.h).
+  std::vector<uint8_t> clearance;
   bool empty = true;  // no triangles: every ray misses
 };
 

@@ -41,15 +41,13 @@ namespace raylab {
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
 inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stats) {
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
-  return walk_grid<kTest, kAnyHit, kCount>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1,
-                                                                           auto& q) {
+  return walk_grid<kTest, kAnyHit, kCount, kBlocks>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
+                                                                                    double t1, auto& q) {
     int32_t v[3];
     for (int a = 0; a < 3; ++a) v[a] = g.virt.coord(a, dr.org[a] + t0 * dr.dir[a]);
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
-    BlockRay<kKdBlockWidth> block_ray;
-    if constexpr (kBlocks) block_ray.init(q.pre.w);
     Irgrid::LookupCache cache;
     // Software pipelining: the walk is a chain of dependent loads (voxel
     // map -> cell -> triangles), so each step first finds the *next* cell
@@ -98,7 +96,7 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
         }
       }
       if constexpr (kBlocks) {
-        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(g.slab_blocks(cur), kd_leaf_blocks(c.count), block_ray,
+        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(g.slab_blocks(cur), kd_leaf_blocks(c.count), q.block_ray,
                                                                  q.ray.tmin, q.rec)) {
           if constexpr (kAnyHit) return;  // found one
         }

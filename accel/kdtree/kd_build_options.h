@@ -4,6 +4,12 @@
 
 namespace raylab {
 
+// The registry's default K_T for kdtree and bsp, whose leaves are 4-wide
+// SIMD triangle blocks (kdtree_accel.cpp says why; measured in
+// docs/fair-fight.md). KdBuildOptions keeps the published constant for the
+// trees traced with scalar leaves (accel/hybrid).
+inline constexpr const char* kKdDefaultTraversalCost = "200";
+
 struct KdBuildOptions {
   // Surface area heuristic constants of Wald & Havran 2006 (their K_T and
   // K_I): cost of one traversal step and of one triangle test.

@@ -14,6 +14,7 @@
 #include <span>
 #include <vector>
 
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/triangle_block.h"
 #include "accel/kdtree/kdtree_node.h"
 #include "base/triangle_mesh.h"
@@ -25,24 +26,29 @@ using KdTriangleBlock = TriangleBlock<kKdBlockWidth>;
 
 inline uint32_t kd_leaf_blocks(uint32_t count) { return (count + kKdBlockWidth - 1) / kKdBlockWidth; }
 
+// Writes the kd_leaf_blocks(count) blocks of one leaf (its `count`
+// triangle ids) to out[0..); shared with the grids' cells (accel/grid).
+inline void fill_kd_leaf_blocks(const TriangleMesh& mesh, const uint32_t* ids, uint32_t count, KdTriangleBlock* out) {
+  for (uint32_t i = 0; i < count; i += kKdBlockWidth)
+    fill_block<kKdBlockWidth>(*out++, ids + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
+                              [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+}
+
 // Appends the blocks of one leaf (its `count` triangle ids) and returns the
 // index of its first block; shared with the BSP tree's leaves (accel/bsp).
 inline uint32_t append_kd_leaf_blocks(const TriangleMesh& mesh, const uint32_t* ids, uint32_t count,
-                                      std::vector<KdTriangleBlock>& blocks) {
+                                      HugePageVector<KdTriangleBlock>& blocks) {
   const uint32_t begin = static_cast<uint32_t>(blocks.size());
-  for (uint32_t i = 0; i < count; i += kKdBlockWidth) {
-    blocks.emplace_back();
-    fill_block<kKdBlockWidth>(blocks.back(), ids + i, static_cast<int>(std::min<uint32_t>(count - i, kKdBlockWidth)),
-                              [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
-  }
+  blocks.resize(blocks.size() + kd_leaf_blocks(count));
+  fill_kd_leaf_blocks(mesh, ids, count, blocks.data() + begin);
   return begin;
 }
 
 // Fills the blocks of every leaf, in node order (a leaf's blocks follow the
 // previous leaf's), and rewrites each leaf's offset to its first block.
-inline std::vector<KdTriangleBlock> make_kd_leaf_blocks(const TriangleMesh& mesh, std::span<KdNode> nodes,
-                                                        std::span<const uint32_t> prim_ids) {
-  std::vector<KdTriangleBlock> blocks;
+inline HugePageVector<KdTriangleBlock> make_kd_leaf_blocks(const TriangleMesh& mesh, std::span<KdNode> nodes,
+                                                           std::span<const uint32_t> prim_ids) {
+  HugePageVector<KdTriangleBlock> blocks;
   for (KdNode& n : nodes) {
     if (!n.is_leaf()) continue;
     n = KdNode::leaf(append_kd_leaf_blocks(mesh, prim_ids.data() + n.offset(), n.count(), blocks), n.count());

@@ -10,6 +10,7 @@
 #include "accel/core/triangle_test_param.h"
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
+#include "accel/kdtree/kd_cache_layout.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/kdtree/kdtree_outline.h"
 #include "accel/kdtree/traverse_kdtree.h"
@@ -22,8 +23,8 @@ enum class KdBuilder { Sah, Median };
 
 class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
-  KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd)
-      : BatchAccelerator(test), builder_(builder), opt_(opt), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
+  KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd, bool cluster)
+      : BatchAccelerator(test), builder_(builder), opt_(opt), cluster_(cluster), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
@@ -38,7 +39,8 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  protected:
   BuildStats build_impl(const TriangleMesh& mesh) override {
     KdTree tree = builder_ == KdBuilder::Sah ? build_kdtree_sah(mesh, opt_) : build_kdtree_median(mesh, opt_);
-    nodes_ = std::move(tree.nodes);
+    if (cluster_) tree = cluster_kd_nodes(tree);
+    nodes_.assign(tree.nodes.begin(), tree.nodes.end());
     blocks_.clear();
     if (blocks_wanted_) {
       // SIMD leaves replace the indices and the triangle copies.
@@ -67,11 +69,15 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  private:
   KdBuilder builder_;
   KdBuildOptions opt_;
-  std::vector<KdNode> nodes_;
+  bool cluster_;  // layout=cluster (kd_cache_layout.h)
+  // Nodes and leaf blocks on transparent huge pages (huge_page_allocator.h):
+  // a ray's ~50 node loads land all over a 5-25 MB tree, and with 4 KiB
+  // pages most of them would also miss the TLB.
+  HugePageVector<KdNode> nodes_;
   std::vector<LeafTriangle> tris_;
   std::vector<uint32_t> ids_;
   bool blocks_wanted_;
-  std::vector<KdTriangleBlock> blocks_;  // C++17 aligned new honours the 32-byte alignment
+  HugePageVector<KdTriangleBlock> blocks_;
   KdTreeView view_;
 };
 
@@ -83,7 +89,13 @@ AcceleratorInfo kdtree_accelerator_info() {
       "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal",
       {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)",
         one_of({"sah", "median"})},
-       sah_traversal_cost_param("builder=sah: "),
+       // K_T = 200 against K_I = 20 (Wald & Havran: 15 and 20): with 4-wide
+       // SIMD leaf blocks a triangle costs a fraction of a scalar test, while
+       // a node step (a dependent load and an unpredictable branch) does not
+       // get cheaper; measured best of 15..300 on the interior views
+       // (docs/fair-fight.md). One tree for simd=0 and 1 (same hits and
+       // counts); ct=15 is the tree tuned for the scalar test.
+       sah_traversal_cost_param("builder=sah: ", kKdDefaultTraversalCost),
        sah_intersection_cost_param("builder=sah: "),
        {"empty_bonus", "0.2", "builder=sah: cost reduction of splits with an empty child, in [0, 1)",
         real_in(0, 1, Ends::OpenHigh)},
@@ -92,7 +104,11 @@ AcceleratorInfo kdtree_accelerator_info() {
        {"leaf", "2", "builder=median: cells with at most this many triangles become leaves", integer_in(1, kUnbounded)},
        triangle_test_param(),
        {"simd", "1", "1 = leaves as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar kernels only (same hits)",
-        boolean_flag()}},
+        boolean_flag()},
+       {"layout", "depth_first",
+        "node order: depth_first (the builder's) or cluster (subtrees clustered into 64-byte cache lines, "
+        "kd_cache_layout.h; measured no faster with the default costs, docs/fair-fight.md)",
+        one_of({"depth_first", "cluster"})}},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         const KdBuilder builder = p.str("builder") == "median" ? KdBuilder::Median : KdBuilder::Sah;
         KdBuildOptions opt;
@@ -109,12 +125,13 @@ AcceleratorInfo kdtree_accelerator_info() {
         opt.perfect_splits = p.boolean("clip");
         opt.max_depth = parse_depth_limit(p);
         opt.median_leaf_size = p.integer("leaf");
-        return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"));
+        return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"),
+                                             p.str("layout") == "cluster");
       }};
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
-  info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0"};
+  info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0", "kdtree:layout=cluster"};
   info.stats = tree_stat_infos("triangle references in leaves",
                                "references per triangle (perfect splits duplicate straddling triangles)",
                                {{"avg_leaf_size", "mean references per non-empty leaf"},
