@@ -15,6 +15,7 @@
 #include "accel/bsp/convex_polytope.h"
 #include "base/mesh_shapes.h"
 #include "scenes/procedural.h"
+#include "scenes/scene_registry.h"
 #include "tests/accel_agreement.h"
 
 namespace raylab {
@@ -164,6 +165,47 @@ TEST(Bsp, CandidateSetsAndStatistics) {
   EXPECT_EQ(leaf->build(mesh).nodes, 1u);
   const auto rays = test::rays_at_triangles(mesh, 300, 1);
   EXPECT_EQ(test::count_brute_mismatches(*leaf, mesh, rays), 0u);
+}
+
+// With the axes alone the BSP builder is the k-d tree's, including its two
+// rules for triangles lying in a split plane (Wald & Havran 2006): they may
+// go to either side (a floor's with the room above it), and a plane on the
+// region's boundary may cut off a flat cell holding them. The city's boxes
+// are all axis-aligned faces; when lying triangles always went below, the
+// tree's SAH cost was 12 % above the k-d tree's (35.1 against 31.4).
+TEST(Bsp, AxisOnlyTreeMatchesTheKdTreeOnAxisAlignedFaces) {
+  const Scene city = load_scene("city:n=4");
+  const BuildStats kd = make_accelerator("kdtree")->build(city.mesh);
+  const BuildStats bsp = make_accelerator("bsp:dirs=3,tplanes=0")->build(city.mesh);
+  EXPECT_NEAR(bsp.sah_cost, kd.sah_cost, 0.01 * kd.sah_cost);
+  EXPECT_NEAR(bsp.extra.at("refs_per_triangle"), kd.extra.at("refs_per_triangle"), 0.02 * kd.extra.at("refs_per_triangle"));
+  BspBuildOptions o;
+  o.directions = 3;
+  o.triangle_planes = 0;
+  const BspTree t = build_bsp(city.mesh, o);  // K_T = 15: more and smaller cells
+  // Flat cells: nodes whose region has zero width along an axis.
+  size_t flat = 0;
+  struct Item {
+    uint32_t node;
+    Vec3f lo, hi;
+  };
+  std::vector<Item> todo{{0, t.bounds.lo, t.bounds.hi}};
+  while (!todo.empty()) {
+    const Item it = todo.back();
+    todo.pop_back();
+    const BspNode& n = t.nodes[it.node];
+    flat += it.lo.x() == it.hi.x() || it.lo.y() == it.hi.y() || it.lo.z() == it.hi.z();
+    if (n.is_leaf()) continue;
+    const int k = static_cast<int>(n.kind());
+    Item below{n.index, it.lo, it.hi}, above{n.index + 1, it.lo, it.hi};
+    below.hi[k] = n.d;
+    above.lo[k] = n.d;
+    todo.push_back(below);
+    todo.push_back(above);
+  }
+  EXPECT_GT(flat, 0u);
+  const auto rays = test::rays_at_triangles(city.mesh, 300, 3);
+  EXPECT_EQ(test::mismatches_vs_brute("bsp:dirs=3,tplanes=0", city.mesh, rays), 0u);
 }
 
 // A sphere in its box leaves the box's corners empty: slanted planes may cut

@@ -23,14 +23,18 @@
 // bonus is given to axis planes only (on slanted planes it shaved empty
 // corners off box-like rooms level after level). With `directions` =
 // 3 and no triangle planes this is the k-d tree's builder (same costs, empty
-// bonus, perfect splits by clipping, depth limit and straddling guard).
+// bonus, sides of lying references, flat cells, perfect splits by clipping,
+// depth limit and straddling guard).
 //
 // Every triangle reference carries the part of its triangle inside the
 // node's region (clipped by the planes above it, the BSP form of the k-d
 // tree's perfect splits), so counts and assignments see only what really
 // lies in the region: a reference goes below when its part reaches below
-// the plane or lies in it, above when it reaches above, both (each with its
-// clipped part) when it straddles. Event positions are rounded outward to
+// the plane, above when it reaches above, both (each with its clipped part)
+// when it straddles; one lying in the plane goes to the side the SAH priced
+// cheaper (both are priced, as in the k-d tree: a floor's triangles belong
+// with the room above it), and a plane on a box region's boundary may cut
+// off a flat cell holding the references lying in it (the k-d tree's rule). Event positions are rounded outward to
 // float (the stored plane's precision), so a plane at an event has the
 // reference on the side it was counted on. Side tests are done in double
 // precision on the stored (float) plane with a tolerance of 1e-12 of the
