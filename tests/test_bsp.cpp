@@ -250,6 +250,38 @@ TEST(Bsp, NoPlaneRepeatsOnAPathAndDiagonalNodesNameTheirDirection) {
   EXPECT_EQ(test::mismatches_vs_brute("bsp", mesh, test::rays_at_triangles(mesh, 300, 2)), 0u);
 }
 
+// The 26-DOP diagonals are candidates only in regions already cut by a
+// slanted plane (diag=polytope, the default): no diagonal node has only
+// axis-aligned ancestors. diag=any allows them in box regions too (a sphere's
+// empty box corners invite them), and both trees find the same hits.
+TEST(Bsp, DiagonalsOnlyBelowASlantedPlaneUnlessAsked) {
+  const TriangleMesh mesh = make_uv_sphere(24, 12, Vec3f(0.1f, 0.2f, 0.3f), 0.7f);
+  auto diagonals_in_boxes = [](const BspTree& t) {
+    size_t count = 0;
+    std::vector<std::pair<uint32_t, bool>> todo{{0, false}};  // node, below a slanted plane
+    while (!todo.empty()) {
+      const auto [index, slanted] = todo.back();
+      todo.pop_back();
+      const BspNode& n = t.nodes[index];
+      if (n.is_leaf()) continue;
+      count += n.kind() == kBspFixed && !slanted;
+      const bool below_slanted = slanted || n.kind() == kBspFixed || n.kind() == kBspGeneral;
+      todo.emplace_back(n.index, below_slanted);
+      todo.emplace_back(n.index + 1, below_slanted);
+    }
+    return count;
+  };
+  BspBuildStats polytope_only, anywhere;
+  BspBuildOptions o;
+  EXPECT_EQ(diagonals_in_boxes(build_bsp(mesh, o, &polytope_only)), 0u);
+  EXPECT_GT(polytope_only.kdop_nodes, 0u);
+  o.diagonals_in_boxes = true;
+  EXPECT_GT(diagonals_in_boxes(build_bsp(mesh, o, &anywhere)), 0u);
+  const auto rays = test::rays_at_triangles(mesh, 300, 4);
+  EXPECT_EQ(test::mismatches_vs_brute("bsp:diag=any", mesh, rays), 0u);
+  EXPECT_THROW(make_accelerator("bsp:diag=box"), SpecError);
+}
+
 // The traced tree is the builder's repacked into 8-byte nodes: every node
 // keeps its plane (axis and diagonal: direction index and offset bits;
 // triangle plane: its side-array entry), its child pair or leaf range.

@@ -129,6 +129,10 @@ AcceleratorInfo bsp_accelerator_info() {
       {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)",
         integer_of({3, 7, 13})},
        {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
+       {"diag", "polytope",
+        "where the 26-DOP diagonals (dirs=7, 13) are candidates: polytope (only in regions already cut by a slanted "
+        "plane) or any (box regions too); docs/bsp-hybrid.md",
+        one_of({"polytope", "any"})},
        {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
         integer_in(2, 64).or_number(0)},
        sah_traversal_cost_param("", kKdDefaultTraversalCost),  // the k-d tree's (same SIMD leaf blocks)
@@ -138,6 +142,7 @@ AcceleratorInfo bsp_accelerator_info() {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
         o.triangle_planes = p.integer("tplanes");
+        o.diagonals_in_boxes = p.str("diag") == "any";
         o.bins = p.integer("bins");
         const SahCosts costs = parse_sah_costs(p);
         o.traversal_cost = costs.traversal;

@@ -9,7 +9,10 @@
 //    sorted start / end / planar events are swept exactly as in the k-d
 //    tree's SAH builder (Wald & Havran 2006), so every position where a
 //    count changes is a candidate (`bins` >= 2: bins - 1 binned positions
-//    instead, the original scheme, kept for the sweep);
+//    instead, the original scheme, kept for the sweep); the diagonals only
+//    in regions already cut by a slanted plane unless `diagonals_in_boxes`
+//    (in box regions their greedy wins cost more further down: see
+//    find_split);
 //  - the planes of up to `triangle_planes` of the node's triangles (evenly
 //    spaced in the node's list), counted exactly. These are what let a BSP
 //    leaf hug slanted geometry, the paper's point.
@@ -60,6 +63,10 @@ namespace raylab {
 struct BspBuildOptions {
   int directions = 13;       // fixed plane directions: 3 (axes), 7 (+ body diagonals), 13 (+ face diagonals)
   int triangle_planes = 8;   // triangle planes tried per node (0 = fixed directions only)
+  // Whether the 26-DOP diagonals are candidates in box regions too (true), or
+  // only in regions already cut by a slanted plane (false, the default; see
+  // find_split in build_bsp.cpp and docs/bsp-hybrid.md for why).
+  bool diagonals_in_boxes = false;
   int bins = 0;              // 0: exact event sweep; 2..64: bins - 1 binned positions per direction
   float traversal_cost = 15.0f;   // K_T
   float intersection_cost = 20.0f;  // K_I
