@@ -7,6 +7,7 @@
 #include "accel/bsp/traverse_bsp.h"
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/core/any_hit_order.h"
 #include "accel/core/view_accelerator.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
@@ -19,7 +20,8 @@ namespace {
 
 class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView> {
  public:
-  using ViewAccelerator::ViewAccelerator;
+  BspAccel(const BspBuildOptions& opt, TriangleTest test, bool any_hit_far_first)
+      : ViewAccelerator(opt, test), any_hit_far_first_(any_hit_far_first) {}
 
   // Depth 0: the scene box; an inner node at depth k draws its split plane
   // clipped to the node's region (the cap face its split creates) as
@@ -57,7 +59,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
       ids_ = std::move(leaf_tris.ids);
     }
     view_ = BspView{nodes_.data(), planes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                    &directions_, blocks_.empty() ? nullptr : blocks_.data()};
+                    &directions_, blocks_.empty() ? nullptr : blocks_.data(), any_hit_far_first_};
 
     const TreeShape shape{.nodes = nodes_.size(),
                           .inner = nodes_.size() - bs.leaves,
@@ -111,6 +113,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
            outline_node(node.child() + 1, above, depth + 1, max_depth, out);
   }
 
+  bool any_hit_far_first_;  // anyhit=back
   BspDirectionTable directions_;
   HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
   std::vector<BspPlane> planes_;
@@ -137,7 +140,8 @@ AcceleratorInfo bsp_accelerator_info() {
         integer_in(2, 64).or_number(0)},
        sah_traversal_cost_param("", kKdDefaultTraversalCost),  // the k-d tree's (same SIMD leaf blocks)
        sah_intersection_cost_param(),
-       depth_limit_param(kBspMaxDepthLimit)},
+       depth_limit_param(kBspMaxDepthLimit),
+       any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
@@ -148,7 +152,7 @@ AcceleratorInfo bsp_accelerator_info() {
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
         o.max_depth = parse_depth_limit(p);
-        return std::make_unique<BspAccel>(o, parse_triangle_test(p));
+        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_far_first(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time
