@@ -42,32 +42,27 @@ inline int dominant_axis(const Vec3f& d) {
   return (ad.x() >= ad.y()) ? (ad.x() >= ad.z() ? 0 : 2) : (ad.y() >= ad.z() ? 1 : 2);
 }
 
-// Least and greatest lane of a 16-lane vector.
-inline float lanes_min(simd::vfloat<kPacketSize> x) {
+// Least (kMax false) or greatest lane of a 16-lane vector.
+template <bool kMax>
+inline float lanes_extreme(simd::vfloat<kPacketSize> x) {
 #if defined(RAYLAB_SIMD_AVX512)
   // Halving (zero-masking extracts: see vfloat<16> on GCC 12's warnings).
-  const __m256 h = _mm256_min_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
-  const __m128 q = _mm_min_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
-  const __m128 e = _mm_min_ps(q, _mm_movehl_ps(q, q));
-  return _mm_cvtss_f32(_mm_min_ss(e, _mm_movehdup_ps(e)));
+  const auto pick = [](auto a, auto b) {
+    if constexpr (sizeof(a) == 32) return kMax ? _mm256_max_ps(a, b) : _mm256_min_ps(a, b);
+    else return kMax ? _mm_max_ps(a, b) : _mm_min_ps(a, b);
+  };
+  const __m256 h = pick(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
+  const __m128 q = pick(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+  const __m128 e = pick(q, _mm_movehl_ps(q, q));
+  return _mm_cvtss_f32(pick(e, _mm_movehdup_ps(e)));
 #else
   alignas(64) float f[kPacketSize];
   x.store(f);
-  return *std::min_element(f, f + kPacketSize);
+  return kMax ? *std::max_element(f, f + kPacketSize) : *std::min_element(f, f + kPacketSize);
 #endif
 }
-inline float lanes_max(simd::vfloat<kPacketSize> x) {
-#if defined(RAYLAB_SIMD_AVX512)
-  const __m256 h = _mm256_max_ps(_mm512_maskz_extractf32x8_ps(0xFF, x.v, 0), _mm512_maskz_extractf32x8_ps(0xFF, x.v, 1));
-  const __m128 q = _mm_max_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
-  const __m128 e = _mm_max_ps(q, _mm_movehl_ps(q, q));
-  return _mm_cvtss_f32(_mm_max_ss(e, _mm_movehdup_ps(e)));
-#else
-  alignas(64) float f[kPacketSize];
-  x.store(f);
-  return *std::max_element(f, f + kPacketSize);
-#endif
-}
+inline float lanes_min(simd::vfloat<kPacketSize> x) { return lanes_extreme<false>(x); }
+inline float lanes_max(simd::vfloat<kPacketSize> x) { return lanes_extreme<true>(x); }
 
 // 16 rays in structure-of-arrays form.
 struct PacketInput {
@@ -152,7 +147,7 @@ struct PacketHits {
   alignas(64) uint32_t prim[kPacketSize];
 
   // The greatest closest-hit bound over the lanes.
-  float greatest_t() const { return *std::max_element(t, t + kPacketSize); }
+  float greatest_t() const { return lanes_max(simd::vfloat<kPacketSize>::load(t)); }
 };
 
 // L lanes of a packet's hits from lane `first` on (L = 16, or 8 when a leaf
@@ -320,7 +315,7 @@ class PacketTracer {
       if (n == kPacketSize && !wide_ref::is_leaf(bvh_.root_ref) && rays[b].org == rays[b + n - 1].org) {
         const PacketInput in(rays.subspan(b, n));
         if (in.coherent(bvh_.fma_origin_limit)) {
-          trace_packet(in, hits.subspan(b, n));
+          trace_packet(in, rays.subspan(b, n), hits.subspan(b, n));
           continue;
         }
       }
@@ -329,70 +324,110 @@ class PacketTracer {
   }
 
  private:
-  // Leaf children are pushed as (parent node, slot), so that a leaf's visit
-  // can run each ray's test of the leaf's box (WideKernel checks that node
+  // Children are pushed as (parent node, slot) (WideKernel checks that node
   // indices fit).
   static constexpr int kSlotBits = 3;
-  static uint32_t leaf_visit_ref(uint32_t node, uint32_t slot) { return wide_ref::kLeafBit | node << kSlotBits | slot; }
 
   void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
-  void trace_packet(const PacketInput& in, std::span<Hit> hits) const {
+  void trace_packet(const PacketInput& in, std::span<const Ray> rays, std::span<Hit> hits) const {
     PacketRays pr;
     PacketFrustum fr;
     PacketHits ph;
     make_packet(in, pr, fr, ph);
-    walk(pr, fr, ph);
+    walk(rays, pr, fr, ph);
     for (int i = 0; i < kPacketSize; ++i)
       hits[i] = ph.prim[i] == kInvalidPrim ? Hit{} : Hit{ph.t[i], ph.u[i], ph.v[i], ph.prim[i]};
   }
 
-  // The frustum walk: inner nodes culled and ordered for the whole packet,
-  // leaves tested by the rays that enter them.
-  void walk(const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
+  // The frustum walk: each inner node's children are culled and ordered for
+  // the whole packet by the frustum test, and pushed as (parent, slot). When
+  // one is taken, every ray first runs its own test of the child's box
+  // (rays_entering): a child no ray enters is skipped, a leaf is tested by the
+  // rays that enter it, and a subtree entered by few rays is finished ray by
+  // ray by the single-ray walk (Benthin et al. 2012), which continues from
+  // the ray's closest hit so far.
+  void walk(std::span<const Ray> rays, const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
     float tmax_hi = ph.greatest_t();
     alignas(64) uint64_t stack[kWideStackSize];
     int sp = 0;
-    uint32_t cur = bvh_.root_ref;
+    uint32_t node_index = bvh_.root_ref;
     while (true) {
-      if (!wide_ref::is_leaf(cur)) {
-        const WideNode<N>& node = bvh_.nodes[cur];
-        V8 tnear;
-        const uint32_t mask = frustum_children(node, fr, V8::broadcast(tmax_hi), tnear);
-        if (mask != 0) {
-          alignas(32) uint32_t refs[N];
-          for (uint32_t c = 0; c < N; ++c)
-            refs[c] = wide_ref::is_leaf(node.child[c]) ? leaf_visit_ref(cur, c) : node.child[c];
-          if ((mask & (mask - 1)) == 0) {
-            cur = refs[simd::ctz(mask)];
-          } else {
-            cur = push_by_distance<N>(refs, mask, tnear, stack, sp,
-                                      [&](uint32_t i) { prefetch_child(bvh_, node.child[i]); });
-          }
-          continue;
+      // The packet visits an inner node: the children the frustum keeps go
+      // on the stack (the nearest, if several, straight to `next`).
+      const WideNode<N>& node = bvh_.nodes[node_index];
+      V8 tnear;
+      const uint32_t mask = frustum_children(node, fr, V8::broadcast(tmax_hi), tnear);
+      uint32_t next = 0;
+      bool have_next = false;
+      if (mask != 0) {
+        alignas(32) uint32_t refs[N];
+        for (uint32_t c = 0; c < N; ++c) refs[c] = child_visit_ref(node_index, c, node.child[c]);
+        const auto prefetch = [&](uint32_t i) { prefetch_child(bvh_, node.child[i]); };
+        if ((mask & (mask - 1)) == 0) {
+          next = refs[simd::ctz(mask)];
+        } else {
+          next = push_by_distance<N>(refs, mask, tnear, stack, sp, prefetch);
         }
-      } else {
-        const WideNode<N>& parent = bvh_.nodes[(cur & ~wide_ref::kLeafBit) >> kSlotBits];
-        const uint32_t slot = cur & ((1u << kSlotBits) - 1u);
-        const uint32_t active = rays_entering(parent, slot, pr, V::load(ph.t));
-        if (active != 0) {
-          const uint32_t leaf = parent.child[slot];
-          const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
-          const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
-          // Rays of one half only: half-width vectors.
-          if ((active >> 8) == 0) intersect_leaf<8>(blocks, nblocks, pr, 0, active, ph);
-          else if ((active & 0xFFu) == 0) intersect_leaf<8>(blocks, nblocks, pr, 8, active >> 8, ph);
-          else intersect_leaf<16>(blocks, nblocks, pr, 0, active, ph);
-          tmax_hi = ph.greatest_t();
-        }
+        have_next = true;
       }
-      // Next stack entry some ray can still enter before its closest hit
-      // (the single-ray walk culls the same way, see walk_wide's pop).
-      const float limit = tmax_hi * kSlabFarScale;
-      while (sp > 0 && key_dist(stack[sp - 1]) > limit) --sp;
-      if (sp == 0) return;
-      cur = key_ref(stack[--sp]);
+      // Entries until the next inner node the packet visits together.
+      while (true) {
+        if (!have_next) {
+          // Next entry some ray can still enter before its closest hit (the
+          // single-ray walk culls the same way, see walk_wide's pop).
+          const float limit = tmax_hi * kSlabFarScale;
+          while (sp > 0 && key_dist(stack[sp - 1]) > limit) --sp;
+          if (sp == 0) return;
+          next = key_ref(stack[--sp]);
+        }
+        have_next = false;
+        const WideNode<N>& parent = bvh_.nodes[(next & ~wide_ref::kLeafBit) >> kSlotBits];
+        const uint32_t slot = next & ((1u << kSlotBits) - 1u);
+        const uint32_t active = rays_entering(parent, slot, pr, V::load(ph.t));
+        if (active == 0) continue;
+        const uint32_t child = parent.child[slot];
+        if (wide_ref::is_leaf(child)) {
+          intersect_leaf(child, pr, active, ph);
+        } else if (simd::popcount(active) <= kSingleRayBelow) {
+          for (uint32_t m = active; m != 0; m &= m - 1) finish_single(rays, simd::ctz(m), child, ph);
+        } else {
+          node_index = child;
+          break;
+        }
+        tmax_hi = ph.greatest_t();
+      }
     }
+  }
+
+  // Subtrees entered by at most this many rays are finished ray by ray.
+  static constexpr int kSingleRayBelow = 2;
+
+  // A child as the packet walk pushes it: (parent node, slot), with the leaf
+  // bit of the child (so that leaves keep their place in the key order).
+  static uint32_t child_visit_ref(uint32_t node, uint32_t slot, uint32_t child) {
+    return (child & wide_ref::kLeafBit) | node << kSlotBits | slot;
+  }
+
+  // Ray i finishes subtree `start` alone, from its closest hit so far.
+  void finish_single(std::span<const Ray> rays, uint32_t i, uint32_t start, PacketHits& ph) const {
+    HitRecorder<false, false> rec(rays[i], nullptr);
+    if (ph.prim[i] != kInvalidPrim) rec.record(ph.t[i], ph.u[i], ph.v[i], ph.prim[i]);
+    walk_wide<N, W, false, false, false>(bvh_, rays[i], start, rec);
+    if (rec.found()) {
+      const Hit& h = rec.hit();
+      ph.t[i] = h.t, ph.u[i] = h.u, ph.v[i] = h.v, ph.prim[i] = h.prim;
+    }
+  }
+
+  // A leaf against the rays that enter it: half-width vectors when they are
+  // all in one half of the packet.
+  void intersect_leaf(uint32_t leaf, const PacketRays& pr, uint32_t active, PacketHits& ph) const {
+    const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
+    const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
+    if ((active >> 8) == 0) intersect_lanes<8>(blocks, nblocks, pr, 0, active, ph);
+    else if ((active & 0xFFu) == 0) intersect_lanes<8>(blocks, nblocks, pr, 8, active >> 8, ph);
+    else intersect_lanes<16>(blocks, nblocks, pr, 0, active, ph);
   }
 
   // The watertight test of intersect_block with rays in the lanes instead of
@@ -405,8 +440,8 @@ class PacketTracer {
   // early rejection of hits behind the origin only saves work: those lanes
   // fail t >= tmin here.) Hits are kept by the recorder's rule (HitRecorder).
   template <int L>
-  static void intersect_leaf(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
-                             uint32_t active, PacketHits& ph) {
+  static void intersect_lanes(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
+                              uint32_t active, PacketHits& ph) {
     HitLanes<L> h(ph, first);
     for (int kz = 0; kz < 3; ++kz) {
       const uint32_t lanes = active & (r.lanes_of_kz[kz] >> first);
