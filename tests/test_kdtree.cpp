@@ -25,7 +25,8 @@ namespace raylab {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-const char* const kKdSpecs[] = {"kdtree", "kdtree:clip=0", "kdtree:builder=median", "kdtree:layout=cluster"};
+const char* const kKdSpecs[] = {"kdtree", "kdtree:clip=0", "kdtree:builder=median", "kdtree:layout=cluster",
+                                "kdtree:anyhit=front"};
 
 // ---------------------------------------------------------------- helpers
 
@@ -376,6 +377,47 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
         std::string first;
         EXPECT_EQ(count_mismatches(*kd.accel, mesh, rays, &first), 0u) << name << " " << spec << ": " << first;
     });
+  }
+}
+
+// Shadow rays leaving a dense sphere towards a light above it, half of them
+// blocked by a quad near the light: the any-hit walk gives the same answers
+// in both orders (accel/core/any_hit_order.h), and back to front (the
+// default) reaches the quad before the sphere's cells around the origin.
+TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
+  TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
+  append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, -4), Vec3f(0, 5, 4));
+  append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, 4), Vec3f(-4, 5, 4));
+  Pcg32 rng(17, 17);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 3000; ++i) {
+    Vec3f n = test::random_direction(rng);
+    n.y() = std::fabs(n.y());  // the upper half, facing the light
+    const Vec3f origin = 1.001f * n;  // just outside the surface (the sphere is tessellated inside radius 1)
+    const Vec3f light(4.0f * rng.uniform() - 2.0f, 10.0f, 4.0f * rng.uniform() - 2.0f);
+    rays.emplace_back(origin, light - origin, 0.0f, 1.0f);
+  }
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  std::vector<uint8_t> ref(rays.size());
+  brute->occluded(rays, ref);
+  const size_t blocked = static_cast<size_t>(std::count(ref.begin(), ref.end(), 1));
+  ASSERT_GT(blocked, rays.size() / 4);
+  ASSERT_LT(blocked, rays.size() * 3 / 4);
+  for (const char* base : {"kdtree", "bsp"}) {
+    uint64_t steps[2] = {0, 0};
+    for (int order = 0; order < 2; ++order) {
+      const std::string spec = std::string(base) + (order == 0 ? ":anyhit=back" : ":anyhit=front");
+      const Built b = build(spec, mesh);
+      std::vector<uint8_t> occ(rays.size());
+      TraversalStats st;
+      b.accel->occluded(rays, occ, &st);
+      EXPECT_EQ(occ, ref) << spec;
+      steps[order] = st.nodes_visited;
+      std::string first;
+      EXPECT_EQ(count_mismatches(*b.accel, brute_force(mesh, rays), rays, &first), 0u) << spec << ": " << first;
+    }
+    EXPECT_LT(steps[0], steps[1]) << base << ": node steps back to front " << steps[0] << ", front to back " << steps[1];
   }
 }
 

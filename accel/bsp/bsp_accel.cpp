@@ -7,6 +7,7 @@
 #include "accel/bsp/traverse_bsp.h"
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/core/any_hit_order.h"
 #include "accel/core/view_accelerator.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
@@ -19,7 +20,8 @@ namespace {
 
 class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView> {
  public:
-  using ViewAccelerator::ViewAccelerator;
+  BspAccel(const BspBuildOptions& opt, TriangleTest test, bool any_hit_far_first)
+      : ViewAccelerator(opt, test), any_hit_far_first_(any_hit_far_first) {}
 
   // Depth 0: the scene box; an inner node at depth k draws its split plane
   // clipped to the node's region (the cap face its split creates) as
@@ -57,7 +59,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
       ids_ = std::move(leaf_tris.ids);
     }
     view_ = BspView{nodes_.data(), planes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                    &directions_, blocks_.empty() ? nullptr : blocks_.data()};
+                    &directions_, blocks_.empty() ? nullptr : blocks_.data(), any_hit_far_first_};
 
     const TreeShape shape{.nodes = nodes_.size(),
                           .inner = nodes_.size() - bs.leaves,
@@ -111,6 +113,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
            outline_node(node.child() + 1, above, depth + 1, max_depth, out);
   }
 
+  bool any_hit_far_first_;  // anyhit=back
   BspDirectionTable directions_;
   HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
   std::vector<BspPlane> planes_;
@@ -129,21 +132,27 @@ AcceleratorInfo bsp_accelerator_info() {
       {{"dirs", "13", "fixed plane directions: 3 (axes), 7 (+ body diagonals) or 13 (+ face diagonals)",
         integer_of({3, 7, 13})},
        {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
+       {"diag", "polytope",
+        "where the 26-DOP diagonals (dirs=7, 13) are candidates: polytope (only in regions already cut by a slanted "
+        "plane) or any (box regions too); docs/bsp-hybrid.md",
+        one_of({"polytope", "any"})},
        {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
         integer_in(2, 64).or_number(0)},
        sah_traversal_cost_param("", kKdDefaultTraversalCost),  // the k-d tree's (same SIMD leaf blocks)
        sah_intersection_cost_param(),
-       depth_limit_param(kBspMaxDepthLimit)},
+       depth_limit_param(kBspMaxDepthLimit),
+       any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
         o.triangle_planes = p.integer("tplanes");
+        o.diagonals_in_boxes = p.str("diag") == "any";
         o.bins = p.integer("bins");
         const SahCosts costs = parse_sah_costs(p);
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
         o.max_depth = parse_depth_limit(p);
-        return std::make_unique<BspAccel>(o, parse_triangle_test(p));
+        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_far_first(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time

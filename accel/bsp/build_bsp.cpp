@@ -51,6 +51,10 @@ struct Candidate {
   float d = 0;
   size_t nl = 0, nr = 0;
   uint32_t direction = 0;  // kKindKdop: index in bsp_fixed_directions()
+  // References lying in the plane go above it (else below). Both sides are
+  // priced, as in the k-d tree (Wald & Havran 2006): a floor's triangles
+  // belong with the room above it, a ceiling's with the room below.
+  bool planar_above = false;
 };
 
 // The node's triangle references, each with the part of its triangle that
@@ -280,7 +284,7 @@ class Builder {
     }
     RefSet left, right;
     EventLists left_ev, right_ev;
-    partition(refs, ev, best.n, best.d, left, right, left_ev, right_ev);
+    partition(refs, ev, best, left, right, left_ev, right_ev);
     if (left.size() == n && right.size() == n) {  // no progress (cannot happen with a counted candidate)
       node->ids = std::move(refs.ids);
       return node;
@@ -317,19 +321,25 @@ class Builder {
     }
   }
   // Exact side rule (see build_bsp.h), on the clipped polygon: below when it
-  // reaches below the plane or lies in it, above when it reaches above.
-  bool goes_below(double smin, double smax) const { return smax <= tol_ || smin < -tol_; }
-  bool goes_above(double, double smax) const { return smax > tol_; }
+  // reaches below the plane, above when it reaches above; one lying in the
+  // plane goes to the side the split chose (Candidate::planar_above).
+  bool lies_in(double smin, double smax) const { return smin >= -tol_ && smax <= tol_; }
+  bool goes_below(double smin, double smax, bool planar_above) const {
+    return smin < -tol_ || (!planar_above && lies_in(smin, smax));
+  }
+  bool goes_above(double smin, double smax, bool planar_above) const {
+    return smax > tol_ || (planar_above && lies_in(smin, smax));
+  }
 
   // Splits the references by the plane (a straddling one gets its part on
   // each side) and, when sweeping, the event lists (see EventLists): events
   // of references kept whole are copied in order with their new indices
   // (which grow in the parent's order, so the order is kept), and the parts
   // of straddling references get fresh events, sorted and merged in.
-  void partition(const RefSet& refs, const EventLists& ev, const Vec3f& nf, float df, RefSet& left, RefSet& right,
+  void partition(const RefSet& refs, const EventLists& ev, const Candidate& split, RefSet& left, RefSet& right,
                  EventLists& left_ev, EventLists& right_ev) const {
-    const Vec3d n = nf.cast<double>();
-    const double d = df;
+    const Vec3d n = split.n.cast<double>();
+    const double d = split.d;
     Vec3d below[kMaxClippedVertices], above[kMaxClippedVertices];
     // Per reference: the side it goes to whole (kBoth: cut) and its index
     // there. Per-thread working memory: no task switch happens in here (the
@@ -349,7 +359,7 @@ class Builder {
       const uint32_t id = refs.ids[i];
       const Vec3d* p = refs.pts.data() + refs.start[i];
       const size_t k = refs.start[i + 1] - refs.start[i];
-      const bool b = goes_below(smin, smax), a = goes_above(smin, smax);
+      const bool b = goes_below(smin, smax, split.planar_above), a = goes_above(smin, smax, split.planar_above);
       if (b && !a) {
         side[i] = kLeftOnly, new_index[i] = static_cast<uint32_t>(left.size());
         left.add(id, p, k);
@@ -458,19 +468,20 @@ class Builder {
     return (kind <= 2 && (nl == 0 || nr == 0)) ? s.lambda_empty : 1.0;
   }
 
-  // Prices a plane with area fractions (pl, pr) and keeps it if it can win.
-  void offer(Search& s, bool is_exact, uint32_t kind, const Vec3f& n, float d, size_t nl, size_t nr, double pl,
-             double pr, uint32_t direction = 0) const {
+  // Prices plane c (its cost field unset) with area fractions (pl, pr) and
+  // keeps it if it can win.
+  void offer(Search& s, bool is_exact, Candidate c, double pl, double pr) const {
+    const size_t nl = c.nl, nr = c.nr;
     if (nl == s.n && nr == s.n) return;  // reduces neither side
     // More than half of the references straddling: the k-d tree's guard
     // against reference blow-up (see accel/kdtree/build_sah_events.cpp).
     if (2 * (nl + nr) > 3 * s.n + 2) return;
-    const double lambda = empty_lambda(s, kind, nl, nr);
+    const double lambda = empty_lambda(s, c.kind, nl, nr);
     // Lower bound with exact areas (al + ar >= area): skip hopeless planes.
     const double ci = opt_.intersection_cost;
     if (lambda * (s.ct + ci * static_cast<double>(std::min(nl, nr))) >= s.exact.cost) return;
     const double cost = lambda * (s.ct + ci * (pl * static_cast<double>(nl) + pr * static_cast<double>(nr)));
-    const Candidate c{cost, kind, n, d, nl, nr, direction};
+    c.cost = cost;
     if (is_exact) {
       if (cost < s.exact.cost) s.exact = c;
       return;
@@ -500,8 +511,11 @@ class Builder {
     }
   }
 
-  // Exact sweep over one direction's sorted events (Wald & Havran 2006 with
-  // the BSP side rule: a reference lying in the plane goes below).
+  // Exact sweep over one direction's sorted events (Wald & Havran 2006):
+  // every position is priced with the references lying in the plane below
+  // and above it. Planes strictly inside the region cut it; a plane on the
+  // region's boundary is offered only to make a flat cell of the references
+  // lying there (the k-d tree's rule), in box regions where its area is exact.
   void sweep_direction(Search& s, const std::vector<uint64_t>& ev, size_t n, int di, const AreaEstimate& est,
                        bool is_exact) const {
     const Vec3f uf = bsp_fixed_directions()[di];
@@ -512,11 +526,21 @@ class Builder {
       const float p = event_pos(ev[i]);
       size_t count[3] = {0, 0, 0};
       for (; i < ev.size() && event_group(ev[i]) == group; ++i) ++count[event_type(ev[i])];
-      nr -= count[kPlanar] + count[kEnd];
-      nl += count[kPlanar];
-      // Only planes strictly inside the region cut it.
-      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, nl, nr, est.below(p), est.above(p), di);
-      nl += count[kStart];
+      const size_t planar = count[kPlanar];
+      nr -= planar + count[kEnd];
+      const Candidate below{
+          .kind = kind, .n = uf, .d = p, .nl = nl + planar, .nr = nr, .direction = static_cast<uint32_t>(di)};
+      Candidate above = below;
+      above.nl = nl, above.nr = nr + planar, above.planar_above = true;
+      const double pl = est.below(p), pr = est.above(p);
+      if (est.cuts(p)) {
+        offer(s, is_exact, below, pl, pr);
+        if (planar > 0) offer(s, is_exact, above, pl, pr);
+      } else if (is_exact && planar > 0) {
+        if (static_cast<double>(p) == est.lo) offer(s, true, below, pl, pr);
+        if (static_cast<double>(p) == est.hi) offer(s, true, above, pl, pr);
+      }
+      nl += planar + count[kStart];
     }
   }
 
@@ -547,7 +571,9 @@ class Builder {
       below += sc.hist_min[b - 1];
       above -= sc.hist_max[b - 1];
       const float p = static_cast<float>(lo + (hi - lo) * b / bins);
-      if (est.cuts(p)) offer(s, is_exact, kind, uf, p, below, above, est.below(p), est.above(p), di);
+      if (!est.cuts(p)) continue;
+      const Candidate c{.kind = kind, .n = uf, .d = p, .nl = below, .nr = above, .direction = static_cast<uint32_t>(di)};
+      offer(s, is_exact, c, est.below(p), est.above(p));
     }
   }
 
@@ -565,14 +591,21 @@ class Builder {
       const Vec3d nn = nf.cast<double>();
       const AreaEstimate est(sc.corners, frame_of(nn));
       if (!est.cuts(df)) continue;
-      size_t nl = 0, nr = 0;
+      size_t nl = 0, nr = 0, planar = 0;
       for (size_t j = 0; j < n; ++j) {
         double smin, smax;
         side_range(refs, j, nn, df, smin, smax);
-        nl += goes_below(smin, smax);
-        nr += goes_above(smin, smax);
+        planar += lies_in(smin, smax);
+        nl += smin < -tol_;
+        nr += smax > tol_;
       }
-      offer(s, false, kKindTriangle, nf, df, nl, nr, est.below(df), est.above(df));
+      const Candidate below{.kind = kKindTriangle, .n = nf, .d = df, .nl = nl + planar, .nr = nr};
+      offer(s, false, below, est.below(df), est.above(df));
+      if (planar > 0) {
+        Candidate above = below;
+        above.nl = nl, above.nr = nr + planar, above.planar_above = true;
+        offer(s, false, above, est.below(df), est.above(df));
+      }
     }
   }
 
@@ -591,7 +624,20 @@ class Builder {
     s.lambda_empty = 1.0 - static_cast<double>(opt_.empty_bonus);
     region.corners(sc.corners);
     if (!sweeps()) project(sc, refs, opt_.directions);
-    for (int di = 0; di < opt_.directions; ++di) {
+    // The 26-DOP diagonals are swept only where the region is no longer a
+    // box, unless asked for (`diagonals_in_boxes`). In a box region a
+    // diagonal competes with axis planes whose children stay boxes, and the
+    // greedy cost, which prices both children as leaves, does not see what
+    // the slanted face costs the subtree below: dragon_in_sponza's root went
+    // to the diagonal x - y = -0.15 (2.85e6 against the best axis plane's
+    // 3.04e6, both dominated by where the dragon's 202k triangles go), which
+    // isolates the dragon in two cuts but slices the atrium's axis-aligned
+    // architecture, and every region of the atrium below it is a polytope:
+    // the tree's SAH cost was 143.5 with diagonals in box regions, 120.3
+    // without (the axes alone: 116.9; docs/bsp-hybrid.md). Below a triangle
+    // plane the region is a polytope already, and diagonals can follow it.
+    const int swept = region.is_box && !opt_.diagonals_in_boxes ? std::min(opt_.directions, 3) : opt_.directions;
+    for (int di = 0; di < swept; ++di) {
       const AreaEstimate est(sc.corners, frames_[di]);
       if (!(est.hi > est.lo)) continue;  // flat along this direction
       const bool is_exact = region.is_box && di < 3;
@@ -607,7 +653,7 @@ class Builder {
       const auto [al, ar] = region.split_areas(c.n.cast<double>(), static_cast<double>(c.d));
       const double cost =
           lambda * (s.ct + ci * (al * static_cast<double>(c.nl) + ar * static_cast<double>(c.nr)) / area);
-      if (cost < s.exact.cost) s.exact = Candidate{cost, c.kind, c.n, c.d, c.nl, c.nr, c.direction};
+      if (cost < s.exact.cost) s.exact = c, s.exact.cost = cost;
     }
     return s.exact;
   }

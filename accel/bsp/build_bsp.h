@@ -9,7 +9,10 @@
 //    sorted start / end / planar events are swept exactly as in the k-d
 //    tree's SAH builder (Wald & Havran 2006), so every position where a
 //    count changes is a candidate (`bins` >= 2: bins - 1 binned positions
-//    instead, the original scheme, kept for the sweep);
+//    instead, the original scheme, kept for the sweep); the diagonals only
+//    in regions already cut by a slanted plane unless `diagonals_in_boxes`
+//    (in box regions their greedy wins cost more further down: see
+//    find_split);
 //  - the planes of up to `triangle_planes` of the node's triangles (evenly
 //    spaced in the node's list), counted exactly. These are what let a BSP
 //    leaf hug slanted geometry, the paper's point.
@@ -23,14 +26,18 @@
 // bonus is given to axis planes only (on slanted planes it shaved empty
 // corners off box-like rooms level after level). With `directions` =
 // 3 and no triangle planes this is the k-d tree's builder (same costs, empty
-// bonus, perfect splits by clipping, depth limit and straddling guard).
+// bonus, sides of lying references, flat cells, perfect splits by clipping,
+// depth limit and straddling guard).
 //
 // Every triangle reference carries the part of its triangle inside the
 // node's region (clipped by the planes above it, the BSP form of the k-d
 // tree's perfect splits), so counts and assignments see only what really
 // lies in the region: a reference goes below when its part reaches below
-// the plane or lies in it, above when it reaches above, both (each with its
-// clipped part) when it straddles. Event positions are rounded outward to
+// the plane, above when it reaches above, both (each with its clipped part)
+// when it straddles; one lying in the plane goes to the side the SAH priced
+// cheaper (both are priced, as in the k-d tree: a floor's triangles belong
+// with the room above it), and a plane on a box region's boundary may cut
+// off a flat cell holding the references lying in it (the k-d tree's rule). Event positions are rounded outward to
 // float (the stored plane's precision), so a plane at an event has the
 // reference on the side it was counted on. Side tests are done in double
 // precision on the stored (float) plane with a tolerance of 1e-12 of the
@@ -56,6 +63,10 @@ namespace raylab {
 struct BspBuildOptions {
   int directions = 13;       // fixed plane directions: 3 (axes), 7 (+ body diagonals), 13 (+ face diagonals)
   int triangle_planes = 8;   // triangle planes tried per node (0 = fixed directions only)
+  // Whether the 26-DOP diagonals are candidates in box regions too (true), or
+  // only in regions already cut by a slanted plane (false, the default; see
+  // find_split in build_bsp.cpp and docs/bsp-hybrid.md for why).
+  bool diagonals_in_boxes = false;
   int bins = 0;              // 0: exact event sweep; 2..64: bins - 1 binned positions per direction
   float traversal_cost = 15.0f;   // K_T
   float intersection_cost = 20.0f;  // K_I

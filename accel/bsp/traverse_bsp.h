@@ -27,7 +27,8 @@
 // gives +-inf (or NaN, treated as "visit") and the walk visits both sides,
 // conservatively; a parallel ray farther away visits only its own side.
 // Hit acceptance is the k-d tree's: a hit is final once no pending region
-// starts before it. Leaves are the k-d tree's 4-wide SIMD triangle blocks
+// starts before it; any-hit walks go back to front unless anyhit=front
+// (accel/core/any_hit_order.h). Leaves are the k-d tree's 4-wide SIMD triangle blocks
 // (kd_leaf_blocks.h) with the watertight test, indices into triangle copies
 // with tri=mt; the block test gives the scalar test's hits bit for bit.
 #include <algorithm>
@@ -62,6 +63,8 @@ struct BspView {
   const BspDirectionTable* directions = nullptr;
   // SIMD leaves (watertight test): a leaf's first() is then its first block.
   const KdTriangleBlock* blocks = nullptr;
+  // Any-hit walks visit cells back to front (accel/core/any_hit_order.h).
+  bool any_hit_far_first = false;
 };
 
 // Per-ray constants of every fixed direction a node may name.
@@ -109,8 +112,9 @@ inline BspPlaneRay bsp_plane_ray(const float n[3], const Vec3f& org, const Vec3f
 
 inline constexpr float kBspGeneralMarginScale = 0x1p-18f;
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, bool kFarFirst = false>
 inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* stats) {
+  static_assert(!kFarFirst || kAnyHit, "only an any-hit walk may change the order");
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
   // The k-d tree's per-ray constants and root clip (same root box rule).
@@ -165,7 +169,7 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
       }
       const float t_near_end = (rel + margin) * inv;
       const float t_far_start = (rel - margin) * inv;
-      node = stack.descend_pair(n.child(), neg, t_near_end, t_far_start, t0, t1);
+      node = stack.template descend_pair_in_order<kFarFirst>(n.child(), neg, t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
     const bool kept = intersect_kd_leaf<kBlocks>(tree, n.first(), n.count(), pre, ray, rec);
@@ -176,7 +180,12 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
 // The walk under the name the generic shell calls (accel/core/view_accelerator.h).
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_view(const BspView& v, const Ray& ray, TraversalStats* stats) {
-  return walk_with_leaf_blocks<kTest>(v, [&]<bool kBlocks>() { return traverse_bsp<kTest, kAnyHit, kCount, kBlocks>(v, ray, stats); });
+  return walk_with_leaf_blocks<kTest>(v, [&]<bool kBlocks>() {
+    if constexpr (kAnyHit) {
+      if (v.any_hit_far_first) return traverse_bsp<kTest, true, kCount, kBlocks, true>(v, ray, stats);
+    }
+    return traverse_bsp<kTest, kAnyHit, kCount, kBlocks>(v, ray, stats);
+  });
 }
 
 }  // namespace raylab

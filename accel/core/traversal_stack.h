@@ -38,6 +38,30 @@ class IntervalStack {
     return descend(first_child + neg, first_child + 1u - neg, t_near_end, t_far_start, t0, t1);
   }
 
+  // The any-hit walk's back-to-front step (accel/core/any_hit_order.h):
+  // the child the ray crosses last is visited first, with its interval
+  // (t0 raised to where it begins), and the near one is pushed with its own
+  // [t0, t_near_end]; with one child crossed the interval stays as it is.
+  [[gnu::always_inline]] uint32_t descend_far_first(uint32_t near, uint32_t far, float t_near_end,
+                                                    float t_far_start, float& t0, float t1) {
+    const bool visit_near = !(t_near_end < t0);
+    const bool visit_far = !(t_far_start > t1);
+    stack_[sp_] = Entry{near, t0, t_near_end < t1 ? t_near_end : t1};
+    sp_ += (visit_near && visit_far) ? 1 : 0;
+    t0 = (visit_far && t_far_start > t0) ? t_far_start : t0;
+    return visit_far ? far : near;
+  }
+
+  // One step of either order for child pairs (see descend_pair).
+  template <bool kFarFirst>
+  [[gnu::always_inline]] uint32_t descend_pair_in_order(uint32_t first_child, uint32_t neg, float t_near_end,
+                                                        float t_far_start, float& t0, float& t1) {
+    if constexpr (kFarFirst)
+      return descend_far_first(first_child + neg, first_child + 1u - neg, t_near_end, t_far_start, t0, t1);
+    else
+      return descend_pair(first_child, neg, t_near_end, t_far_start, t0, t1);
+  }
+
   // After a leaf: false when the walk is over, because an any-hit walk kept a
   // hit there (`kept`) or no pushed cell can still hold a closer one;
   // otherwise the next cell and its interval, as pop_within().

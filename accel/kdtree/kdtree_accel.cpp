@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
@@ -23,12 +24,21 @@ enum class KdBuilder { Sah, Median };
 
 class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
-  KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd, bool cluster)
-      : BatchAccelerator(test), builder_(builder), opt_(opt), cluster_(cluster), blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
+  KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd, bool cluster,
+              bool any_hit_far_first)
+      : BatchAccelerator(test),
+        builder_(builder),
+        opt_(opt),
+        cluster_(cluster),
+        any_hit_far_first_(any_hit_far_first),
+        blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      if constexpr (kAnyHit) {
+        if (any_hit_far_first_) return traverse_kdtree<kTest, true, kCount, kBlocks, true>(view_, ray, stats);
+      }
       return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
     });
   }
@@ -70,6 +80,7 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
   KdBuilder builder_;
   KdBuildOptions opt_;
   bool cluster_;  // layout=cluster (kd_cache_layout.h)
+  bool any_hit_far_first_;  // anyhit=back (accel/core/any_hit_order.h)
   // Nodes and leaf blocks on transparent huge pages (huge_page_allocator.h):
   // a ray's ~50 node loads land all over a 5-25 MB tree, and with 4 KiB
   // pages most of them would also miss the TLB.
@@ -86,7 +97,8 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
 AcceleratorInfo kdtree_accelerator_info() {
   AcceleratorInfo info{
       "kdtree",
-      "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal",
+      "k-d tree: O(N log N) SAH build (Wald & Havran 2006, TBB), perfect splits, front-to-back traversal "
+      "(any-hit: back to front)",
       {{"builder", "sah", "sah (event sweep, Wald & Havran 2006) or median (spatial median baseline)",
         one_of({"sah", "median"})},
        // K_T = 200 against K_I = 20 (Wald & Havran: 15 and 20): with 4-wide
@@ -108,7 +120,8 @@ AcceleratorInfo kdtree_accelerator_info() {
        {"layout", "depth_first",
         "node order: depth_first (the builder's) or cluster (subtrees clustered into 64-byte cache lines, "
         "kd_cache_layout.h; measured no faster with the default costs, docs/fair-fight.md)",
-        one_of({"depth_first", "cluster"})}},
+        one_of({"depth_first", "cluster"})},
+       any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         const KdBuilder builder = p.str("builder") == "median" ? KdBuilder::Median : KdBuilder::Sah;
         KdBuildOptions opt;
@@ -126,12 +139,13 @@ AcceleratorInfo kdtree_accelerator_info() {
         opt.max_depth = parse_depth_limit(p);
         opt.median_leaf_size = p.integer("leaf");
         return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"),
-                                             p.str("layout") == "cluster");
+                                             p.str("layout") == "cluster", parse_any_hit_far_first(p));
       }};
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
-  info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0", "kdtree:layout=cluster"};
+  info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0", "kdtree:layout=cluster",
+                "kdtree:anyhit=front"};
   info.stats = tree_stat_infos("triangle references in leaves",
                                "references per triangle (perfect splits duplicate straddling triangles)",
                                {{"avg_leaf_size", "mean references per non-empty leaf"},

@@ -39,7 +39,9 @@
 // kept as a bound and the traversal goes on only through cells that start
 // before it, instead of being rejected and found again later.
 // Closest hit and any hit are one routine (kAnyHit returns at the first hit);
-// counting is a compile-time switch (kCount).
+// counting is a compile-time switch (kCount). An any-hit walk may visit the
+// cells back to front instead (kFarFirst, accel/core/any_hit_order.h): same
+// answers, fewer steps for shadow rays leaving dense surfaces.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -134,8 +136,9 @@ template <bool kBlocks, class Tree, class LeafRay, class Recorder>
     return intersect_leaf_indexed(pre, ray, tree.tris, tree.ids + first, count, rec);
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false>
 inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStats* stats) {
+  static_assert(!kFarFirst || kAnyHit, "only an any-hit walk may change the order");
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
   KdRay kr;
@@ -164,7 +167,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
       const float t_near_end = (rel + margin[k]) * inv[k];
       const float t_far_start = (rel - margin[k]) * inv[k];
       // Below child = child(), above = child() + 1.
-      node = stack.descend_pair(n.child(), neg[k], t_near_end, t_far_start, t0, t1);
+      node = stack.template descend_pair_in_order<kFarFirst>(n.child(), neg[k], t_near_end, t_far_start, t0, t1);
       n = tree.nodes[node];
     }
 
