@@ -8,6 +8,7 @@
 #include "accel/kdtree/kd_build_options.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "accel/core/any_hit_order.h"
+#include "accel/core/simd_param.h"
 #include "accel/core/view_accelerator.h"
 #include "accel/core/tree_stats.h"
 #include "accel/core/structure_info.h"
@@ -20,8 +21,8 @@ namespace {
 
 class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView> {
  public:
-  BspAccel(const BspBuildOptions& opt, TriangleTest test, bool any_hit_far_first)
-      : ViewAccelerator(opt, test), any_hit_far_first_(any_hit_far_first) {}
+  BspAccel(const BspBuildOptions& opt, TriangleTest test, bool any_hit_far_first, bool simd)
+      : ViewAccelerator(opt, test), any_hit_far_first_(any_hit_far_first), simd_(simd) {}
 
   // Depth 0: the scene box; an inner node at depth k draws its split plane
   // clipped to the node's region (the cap face its split creates) as
@@ -48,7 +49,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
     tris_.clear();
     ids_.clear();
     blocks_.clear();
-    if (leaf_blocks_wanted(true, this->triangle_test())) {
+    if (leaf_blocks_wanted(simd_, this->triangle_test())) {
       // SIMD leaves (the k-d tree's 4-wide blocks) replace the indices and the triangle copies.
       for (BspPackedNode& n : nodes_)
         if (n.is_leaf()) n = BspPackedNode::leaf(append_kd_leaf_blocks(mesh, tree.prim_ids.data() + n.first(), n.count(), blocks_), n.count());
@@ -114,6 +115,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
   }
 
   bool any_hit_far_first_;  // anyhit=back
+  bool simd_;               // simd=1: leaves as the k-d tree's SIMD blocks
   BspDirectionTable directions_;
   HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
   std::vector<BspPlane> planes_;
@@ -141,7 +143,8 @@ AcceleratorInfo bsp_accelerator_info() {
        sah_traversal_cost_param("", kKdDefaultTraversalCost),  // the k-d tree's (same SIMD leaf blocks)
        sah_intersection_cost_param(),
        depth_limit_param(kBspMaxDepthLimit),
-       any_hit_order_param()},
+       any_hit_order_param(),
+       simd_param("leaves as the k-d tree's 4-wide SIMD triangle blocks (tri=watertight)")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BspBuildOptions o;
         o.directions = p.integer("dirs");
@@ -152,12 +155,13 @@ AcceleratorInfo bsp_accelerator_info() {
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
         o.max_depth = parse_depth_limit(p);
-        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_far_first(p));
+        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_far_first(p), parse_simd(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time
   // (the BSP build is slow), so they are covered by tests/test_bsp.cpp only.
-  info.cover = {"bsp:dirs=3,tplanes=0", "bsp:tri=mt"};
+  info.cover = {"bsp:dirs=3,tplanes=0", "bsp:tri=mt", "bsp:simd=0"};
+  info.caps.scalar_variant = "simd=0";
   info.stats = tree_stat_infos("triangle references in leaves",
                                "references per triangle (straddling triangles are in both children)",
                                {{"axis_nodes", "inner nodes with axis-aligned planes (k-d fast path)"},

@@ -30,6 +30,7 @@
 #include "accel/bvh/traverse_sphere_bvh.h"
 #include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/traverse_wide.h"
+#include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/triangle_test_param.h"
 #include "base/timer.h"
@@ -357,10 +358,8 @@ AcceleratorInfo bvh_accelerator_info() {
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
         one_of({"box", "sphere"})},
-       {"simd", "1",
-        "1 = SIMD node and leaf tests; 0 = the same tree and walk with scalar tests (same hits and counts; "
-        "wide layouts need block=8; bvh2 is scalar either way)",
-        boolean_flag()}},
+       simd_param("SIMD node and leaf tests",
+                  " and counts; wide layouts need block=8; bvh2 is scalar either way")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         BvhConfig c;
         const auto& b = p.str("builder");
@@ -387,7 +386,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.block_cost = static_cast<float>(p.real("ci"));
         c.tri = parse_triangle_test(p);
         c.packet = p.integer("packet");
-        c.simd = p.boolean("simd");
+        c.simd = parse_simd(p);
         if (!c.simd && c.packet != 0) throw SpecError("bvh: packet=16 needs simd=1");
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");

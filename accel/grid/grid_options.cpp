@@ -1,5 +1,6 @@
 #include "accel/grid/grid_options.h"
 
+#include "accel/core/simd_param.h"
 #include "accel/core/triangle_test_param.h"
 
 #include <cmath>
@@ -28,9 +29,7 @@ std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top) {
   p.push_back({"assign", "exact", "triangle-to-cell assignment: exact (SAT, Akenine-Moller 2001) or bbox",
                one_of({"exact", "bbox"})});
   p.push_back(triangle_test_param());
-  p.push_back({"simd", "1",
-               "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)",
-               boolean_flag()});
+  p.push_back(simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)"));
   return p;
 }
 
@@ -47,7 +46,7 @@ GridOptions parse_grid_options(const Params& p, bool with_res, bool with_top) {
   o.budget_mib = p.real("budget");
   o.assign = p.str("assign") == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
   o.test = parse_triangle_test(p);
-  o.simd = p.boolean("simd");
+  o.simd = parse_simd(p);
   return o;
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/structure_info.h"
@@ -78,8 +79,7 @@ AcceleratorInfo irgrid_accelerator_info() {
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)",
         boolean_flag()},
        {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()},
-       {"simd", "1", "1 = cells' triangles as 4-wide SIMD blocks (tri=watertight); 0 = scalar kernels only (same hits)",
-        boolean_flag()}},
+       simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
@@ -88,7 +88,7 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.max_depth = p.integer("depth");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
-        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), p.boolean("simd"));
+        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p));
       });
   info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0"};  // both off: tests/test_irgrid.cpp
   info.caps.scalar_variant = "simd=0";

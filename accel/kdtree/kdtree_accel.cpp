@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/core/simd_param.h"
 #include "accel/core/any_hit_order.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
@@ -115,8 +116,7 @@ AcceleratorInfo kdtree_accelerator_info() {
        depth_limit_param(kKdMaxDepthLimit),
        {"leaf", "2", "builder=median: cells with at most this many triangles become leaves", integer_in(1, kUnbounded)},
        triangle_test_param(),
-       {"simd", "1", "1 = leaves as 4-wide SIMD triangle blocks (tri=watertight); 0 = scalar kernels only (same hits)",
-        boolean_flag()},
+       simd_param("leaves as 4-wide SIMD triangle blocks (tri=watertight)"),
        {"layout", "depth_first",
         "node order: depth_first (the builder's) or cluster (subtrees clustered into 64-byte cache lines, "
         "kd_cache_layout.h; measured no faster with the default costs, docs/fair-fight.md)",
@@ -138,7 +138,7 @@ AcceleratorInfo kdtree_accelerator_info() {
         opt.perfect_splits = p.boolean("clip");
         opt.max_depth = parse_depth_limit(p);
         opt.median_leaf_size = p.integer("leaf");
-        return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), p.boolean("simd"),
+        return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), parse_simd(p),
                                              p.str("layout") == "cluster", parse_any_hit_far_first(p));
       }};
   info.caps.mt_variant = "tri=mt";

@@ -1,5 +1,6 @@
 #include "accel/loose_octree/loose_octree_accel.h"
 
+#include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
@@ -89,13 +90,13 @@ AcceleratorInfo loose_octree_accelerator_info() {
       {{"k", "2", "looseness: loose box side / cell side, in [1, 4] (2 = each side doubled, Ericson 7.3.6)", real_in(1, 4)},
        octree_leaf_param("a node with at most this many triangles keeps them (1..1000)"),
        {"max_depth", "20", "depth limit, root = 0 (0..20)", integer_in(0, kOctMaxLevel)},
-       octree_simd_param()},
+       simd_param("node lists as 4-wide SIMD triangle blocks (tri=watertight)")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         LooseOctreeOptions opt;
         opt.looseness = p.real("k");
         opt.leaf = static_cast<uint32_t>(p.integer("leaf"));
         opt.max_depth = p.integer("max_depth");
-        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), p.boolean("simd"));
+        return std::make_unique<LooseOctreeAccel>(opt, parse_triangle_test(p), parse_simd(p));
       });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"loose_octree:k=1.25", "loose_octree:simd=0"};

@@ -1,5 +1,6 @@
 #include "accel/octree/octree_accel.h"
 
+#include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/tree_stats.h"
@@ -146,7 +147,7 @@ AcceleratorInfo octree_accelerator_info() {
         "or hash (Morton location codes, occupied nodes only)",
         one_of({"pointer", "linear", "hash"})},
        {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB", real_in(0, 1e6, Ends::OpenLow)},
-       octree_simd_param()},
+       simd_param("node lists as 4-wide SIMD triangle blocks (tri=watertight)")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         OctreeOptions opt;
         opt.build.leaf = static_cast<uint32_t>(p.integer("leaf"));
@@ -159,7 +160,7 @@ AcceleratorInfo octree_accelerator_info() {
         opt.build.assign = p.str("assign") == "straddle" ? OctreeAssign::Straddle : OctreeAssign::Exact;
         opt.budget_mib = p.real("budget");
         if (p.given("budget") && storage != "linear") throw SpecError("octree: budget applies to storage=linear only");
-        opt.simd = p.boolean("simd");
+        opt.simd = parse_simd(p);
         const TriangleTest test = parse_triangle_test(p);
         if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
         if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
