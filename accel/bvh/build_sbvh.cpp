@@ -351,44 +351,12 @@ class SbvhBuilder {
     }
   }
 
-  void build(uint32_t node, std::vector<BuildRef> refs, const Box4& bounds, const Box4& cbounds, int depth) {
+  // Splits `refs` into two non-empty halves: the spatial split when it is
+  // cheaper and the duplication budget allows it, else the object split, else
+  // (identical centroids, or too deep) the object median of the widest axis.
+  void partition_refs(std::vector<BuildRef>& refs, const Split& object, const SpatialSplit& spatial, const Binning* bn,
+                      const float cext[4], int depth, std::vector<BuildRef>& left, std::vector<BuildRef>& right) {
     const size_t n = refs.size();
-    if (n < opt_.min_spatial_refs && n > static_cast<size_t>(std::max(1, opt_.base.leaf_threshold)))
-      return build_binned_subtree(node, std::move(refs), depth);
-    if (n <= static_cast<size_t>(std::max(1, opt_.base.leaf_threshold))) return make_leaf(node, refs, bounds);
-
-    alignas(16) float cext[4];
-    _mm_store_ps(cext, _mm_sub_ps(cbounds.hi, cbounds.lo));
-    const bool flat = !(cext[0] > 0.0f || cext[1] > 0.0f || cext[2] > 0.0f);
-    const float area = bounds.half_area();
-
-    Split object;
-    std::unique_ptr<Binning> bn;
-    if (!flat) {
-      bn = std::make_unique<Binning>(cbounds, opt_.base.bins);
-      const auto bins = sah::bin_refs(refs.data(), 0, n, *bn, opt_.base.bins);
-      object = sah::find_binned_split(*bins, *bn, opt_.base.bins);
-    }
-    SpatialSplit spatial;
-    if (depth < kForceMedianDepth && n >= opt_.min_spatial_refs && budget_.load(std::memory_order_relaxed) > 0 &&
-        root_area_ > 0.0f) {
-      float overlap = 0.0f;
-      if (object.axis >= 0) {
-        Box4 inter;
-        inter.lo = _mm_max_ps(object.left.lo, object.right.lo);
-        inter.hi = _mm_min_ps(object.left.hi, object.right.hi);
-        overlap = inter.half_area();
-      }
-      if (object.axis < 0 || overlap / root_area_ > opt_.alpha) spatial = find_spatial_split(refs, bounds);
-    }
-    const float best_cost = std::min(object.cost, spatial.cost);
-    const float split_cost =
-        opt_.base.traversal_cost + opt_.base.intersection_cost * (area > 0.0f ? best_cost / area : 0.0f);
-    if (n <= static_cast<size_t>(opt_.base.max_leaf) &&
-        (!std::isfinite(best_cost) || opt_.base.intersection_cost * static_cast<float>(n) <= split_cost))
-      return make_leaf(node, refs, bounds);
-
-    std::vector<BuildRef> left, right;
     bool done = false;
     if (depth < kForceMedianDepth && spatial.cost < object.cost) {
       // Reserve the worst-case number of duplicates from the budget.
@@ -431,6 +399,47 @@ class SbvhBuilder {
       left.assign(refs.begin(), refs.begin() + n / 2);
       right.assign(refs.begin() + n / 2, refs.end());
     }
+  }
+
+  void build(uint32_t node, std::vector<BuildRef> refs, const Box4& bounds, const Box4& cbounds, int depth) {
+    const size_t n = refs.size();
+    if (n < opt_.min_spatial_refs && n > static_cast<size_t>(std::max(1, opt_.base.leaf_threshold)))
+      return build_binned_subtree(node, std::move(refs), depth);
+    if (n <= static_cast<size_t>(std::max(1, opt_.base.leaf_threshold))) return make_leaf(node, refs, bounds);
+
+    alignas(16) float cext[4];
+    _mm_store_ps(cext, _mm_sub_ps(cbounds.hi, cbounds.lo));
+    const bool flat = !(cext[0] > 0.0f || cext[1] > 0.0f || cext[2] > 0.0f);
+    const float area = bounds.half_area();
+
+    Split object;
+    std::unique_ptr<Binning> bn;
+    if (!flat) {
+      bn = std::make_unique<Binning>(cbounds, opt_.base.bins);
+      const auto bins = sah::bin_refs(refs.data(), 0, n, *bn, opt_.base.bins);
+      object = sah::find_binned_split(*bins, *bn, opt_.base.bins);
+    }
+    SpatialSplit spatial;
+    if (depth < kForceMedianDepth && n >= opt_.min_spatial_refs && budget_.load(std::memory_order_relaxed) > 0 &&
+        root_area_ > 0.0f) {
+      float overlap = 0.0f;
+      if (object.axis >= 0) {
+        Box4 inter;
+        inter.lo = _mm_max_ps(object.left.lo, object.right.lo);
+        inter.hi = _mm_min_ps(object.left.hi, object.right.hi);
+        overlap = inter.half_area();
+      }
+      if (object.axis < 0 || overlap / root_area_ > opt_.alpha) spatial = find_spatial_split(refs, bounds);
+    }
+    const float best_cost = std::min(object.cost, spatial.cost);
+    const float split_cost =
+        opt_.base.traversal_cost + opt_.base.intersection_cost * (area > 0.0f ? best_cost / area : 0.0f);
+    if (n <= static_cast<size_t>(opt_.base.max_leaf) &&
+        (!std::isfinite(best_cost) || opt_.base.intersection_cost * static_cast<float>(n) <= split_cost))
+      return make_leaf(node, refs, bounds);
+
+    std::vector<BuildRef> left, right;
+    partition_refs(refs, object, spatial, bn.get(), cext, depth, left, right);
     std::vector<BuildRef>().swap(refs);
     Box4 lb, lcb, rb, rcb;
     bounds_of(left, lb, lcb);
