@@ -165,5 +165,26 @@ TEST(Workflow, SnakefilePlansTheQuickPreset) {
   fs::remove_all(dir);
 }
 
+// Every other preset plans too: the scalar preset's specs ("grid:simd=0") are not file
+// names, so its equal-time jobs are keyed by the spec's slug (the planner refused it before).
+TEST(Workflow, SnakefilePlansTheScalarAndFullPresets) {
+  ASSERT_EQ(sh("command -v snakemake").exit_code, 0) << "snakemake not installed (bash scripts/install-deps.sh)";
+  const auto dir = test::temp_dir("workflow_presets");
+  for (const std::string preset : {"scalar", "full"}) {
+    const Shell r = sh("cd " + kSource + " && snakemake -s workflow/Snakefile -n -p --nolock --cores 2 --config preset=" +
+                       preset + " raylab=" + std::string(RAYLAB_BINARY) + " out=" + (dir / preset).string() +
+                       " node_cores=2 shared_scenes_marker=/nonexistent > " + (dir / "plan.txt").string() +
+                       " 2>&1; rc=$?; tr -s ' ' < " + (dir / "plan.txt").string() + "; exit $rc");
+    ASSERT_EQ(r.exit_code, 0) << preset << ": " << r.output;
+    EXPECT_THAT(r.output, HasSubstr("equal_time_renders ")) << preset;
+    if (preset == "scalar") {
+      // One render job per scalar spec, the spec passed whole to raylab.
+      EXPECT_THAT(r.output, HasSubstr("equal_time_renders 13 "));
+      EXPECT_THAT(r.output, HasSubstr("--accel 'kdtree:simd=0,ct=15'"));
+    }
+  }
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace raylab
