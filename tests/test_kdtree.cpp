@@ -404,7 +404,7 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   const size_t blocked = static_cast<size_t>(std::count(ref.begin(), ref.end(), 1));
   ASSERT_GT(blocked, rays.size() / 4);
   ASSERT_LT(blocked, rays.size() * 3 / 4);
-  for (const char* base : {"kdtree", "bsp"}) {
+  for (const char* base : {"kdtree", "bsp", "octree"}) {  // every tree with the anyhit order
     uint64_t steps[2] = {0, 0};
     for (int order = 0; order < 2; ++order) {
       const std::string spec = std::string(base) + (order == 0 ? ":anyhit=back" : ":anyhit=front");

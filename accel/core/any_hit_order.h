@@ -1,6 +1,6 @@
 #pragma once
 // The order of an any-hit (occlusion) walk through a space-partitioning tree
-// (k-d tree, BSP): the `anyhit` parameter, declared and parsed in one place.
+// (k-d tree, BSP, octree): the `anyhit` parameter, declared and parsed in one place.
 //
 // An occlusion query asks whether any triangle lies on the segment, so the
 // walk may visit the cells in any order and still give the same answer (it

@@ -1,5 +1,6 @@
 #include "accel/octree/octree_accel.h"
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
@@ -21,6 +22,7 @@ struct OctreeOptions {
   OctreeStorage storage = OctreeStorage::Pointer;
   double budget_mib = 2048.0;
   bool simd = true;  // node lists as SIMD triangle blocks (watertight test only)
+  bool any_hit_far_first = true;  // anyhit=back
 };
 
 template <typename Layout>
@@ -32,6 +34,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
+      if constexpr (kAnyHit) {
+        if (opt_.any_hit_far_first) return traverse_octree<kTest, true, kCount, kBlocks, Layout, true>(view_, ray, stats);
+      }
       return traverse_octree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
     });
   }
@@ -147,7 +152,8 @@ AcceleratorInfo octree_accelerator_info() {
         "or hash (Morton location codes, occupied nodes only)",
         one_of({"pointer", "linear", "hash"})},
        {"budget", "2048", "storage=linear: memory budget of the complete-tree array in MiB", real_in(0, 1e6, Ends::OpenLow)},
-       simd_param("node lists as 4-wide SIMD triangle blocks (tri=watertight)")},
+       simd_param("node lists as 4-wide SIMD triangle blocks (tri=watertight)"),
+       any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         OctreeOptions opt;
         opt.build.leaf = static_cast<uint32_t>(p.integer("leaf"));
@@ -161,6 +167,7 @@ AcceleratorInfo octree_accelerator_info() {
         opt.budget_mib = p.real("budget");
         if (p.given("budget") && storage != "linear") throw SpecError("octree: budget applies to storage=linear only");
         opt.simd = parse_simd(p);
+        opt.any_hit_far_first = parse_any_hit_far_first(p);
         const TriangleTest test = parse_triangle_test(p);
         if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
         if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
@@ -168,7 +175,7 @@ AcceleratorInfo octree_accelerator_info() {
       });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash", "octree:simd=0",
-                "octree:term=count"};
+                "octree:term=count", "octree:anyhit=front"};
   info.stats = tree_stat_infos(
       "triangle references in all nodes", "references per triangle (exact assignment duplicates straddling triangles)",
       {{"inner_references", "references held by inner nodes (assign=straddle)"},

@@ -17,8 +17,11 @@
 // table for ordinary rays and stays correct when inflated children overlap
 // (below). Closest hit: children are pushed on a stack in reverse order, so
 // they are walked front to back, and a walk ends once no pending node starts
-// before the closest hit so far (early exit). Occlusion walks the same order
-// and stops at the first hit.
+// before the closest hit so far (early exit). Occlusion stops at the first
+// hit; with kFarFirst (anyhit=back, accel/core/any_hit_order.h) it walks the
+// children in the reverse order, from the segment's far end (the light of a
+// shadow ray), as the k-d tree and the BSP do: the same answers, and fewer
+// nodes when the origin lies on a dense surface.
 //
 // Robustness, as the k-d tree's (accel/kdtree/traverse_kdtree.h): every
 // cell is treated as inflated by delta = 2^-20 M in space (M bounds
@@ -217,7 +220,8 @@ inline int octree_child_order_scalar(float t0, float t1, const float near_end[3]
 }
 
 // kBlocks: node lists are SIMD triangle blocks (watertight test only).
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, typename Layout>
+// kFarFirst: occlusion walks back to front (ignored for closest hits).
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, typename Layout, bool kFarFirst = false>
 inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
@@ -277,12 +281,23 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
                      k.t0,
                      k.t1};
       };
-      for (int i = n - 1; i >= 1; --i) stack[sp++] = entry(kids[i]);
-      // The nearest child is entered at once (its entry is <= t_bound, as
-      // the order was computed on [t0, min(t1, t_bound)]): no stack round trip.
-      if (n > 0) {
-        cur = entry(kids[0]);
-        continue;
+      if constexpr (kAnyHit && kFarFirst) {
+        // Far to near: the farthest child at once, the others popped after it
+        // (an occlusion walk keeps t_bound = tmax until it returns, so every
+        // pending child is still visited when no hit is found).
+        for (int i = 0; i < n - 1; ++i) stack[sp++] = entry(kids[i]);
+        if (n > 0) {
+          cur = entry(kids[n - 1]);
+          continue;
+        }
+      } else {
+        for (int i = n - 1; i >= 1; --i) stack[sp++] = entry(kids[i]);
+        // The nearest child is entered at once (its entry is <= t_bound, as
+        // the order was computed on [t0, min(t1, t_bound)]): no stack round trip.
+        if (n > 0) {
+          cur = entry(kids[0]);
+          continue;
+        }
       }
     }
     // Next node that can still hold a closer hit.
