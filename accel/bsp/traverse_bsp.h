@@ -38,6 +38,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "accel/core/any_hit_order.h"
 #include "accel/bsp/bsp_packed_node.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/traversal_stack.h"
@@ -181,10 +182,9 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_view(const BspView& v, const Ray& ray, TraversalStats* stats) {
   return walk_with_leaf_blocks<kTest>(v, [&]<bool kBlocks>() {
-    if constexpr (kAnyHit) {
-      if (v.any_hit_far_first) return traverse_bsp<kTest, true, kCount, kBlocks, true>(v, ray, stats);
-    }
-    return traverse_bsp<kTest, kAnyHit, kCount, kBlocks>(v, ray, stats);
+    return walk_in_any_hit_order<kAnyHit>(v.any_hit_far_first, [&]<bool kFarFirst>() {
+      return traverse_bsp<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(v, ray, stats);
+    });
   });
 }
 

@@ -28,4 +28,16 @@ inline ParamInfo any_hit_order_param() {
 // True when any-hit walks visit cells from the far end.
 inline bool parse_any_hit_far_first(const Params& p) { return p.str("anyhit") == "back"; }
 
+// Runs `walk.template operator()<kFarFirst>()` with kFarFirst = far_first for
+// any-hit walks and false for closest-hit walks (whose order is fixed), so a
+// structure's trace() picks the walk in one line and no closest-hit walk is
+// ever instantiated with the reversed order.
+template <bool kAnyHit, typename Walk>
+[[gnu::always_inline]] inline auto walk_in_any_hit_order(bool far_first, Walk&& walk) {
+  if constexpr (kAnyHit) {
+    if (far_first) return walk.template operator()<true>();
+  }
+  return walk.template operator()<false>();
+}
+
 }  // namespace raylab

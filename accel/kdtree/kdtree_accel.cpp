@@ -37,10 +37,9 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
-      if constexpr (kAnyHit) {
-        if (any_hit_far_first_) return traverse_kdtree<kTest, true, kCount, kBlocks, true>(view_, ray, stats);
-      }
-      return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+      return walk_in_any_hit_order<kAnyHit>(any_hit_far_first_, [&]<bool kFarFirst>() {
+        return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(view_, ray, stats);
+      });
     });
   }
   void outline(int max_depth, StructureOutline& out) const override {

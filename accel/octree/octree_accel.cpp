@@ -34,10 +34,9 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
-      if constexpr (kAnyHit) {
-        if (opt_.any_hit_far_first) return traverse_octree<kTest, true, kCount, kBlocks, Layout, true>(view_, ray, stats);
-      }
-      return traverse_octree<kTest, kAnyHit, kCount, kBlocks>(view_, ray, stats);
+      return walk_in_any_hit_order<kAnyHit>(opt_.any_hit_far_first, [&]<bool kFarFirst>() {
+        return traverse_octree<kTest, kAnyHit, kCount, kBlocks, Layout, kFarFirst>(view_, ray, stats);
+      });
     });
   }
 

@@ -220,9 +220,10 @@ inline int octree_child_order_scalar(float t0, float t1, const float near_end[3]
 }
 
 // kBlocks: node lists are SIMD triangle blocks (watertight test only).
-// kFarFirst: occlusion walks back to front (ignored for closest hits).
+// kFarFirst: occlusion walks back to front.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, typename Layout, bool kFarFirst = false>
 inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, TraversalStats* stats) {
+  static_assert(!kFarFirst || kAnyHit, "only an any-hit walk may change the order");
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (tree.empty || !ray_is_valid(ray)) return rec.hit();
   OctRay r;
@@ -281,7 +282,7 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
                      k.t0,
                      k.t1};
       };
-      if constexpr (kAnyHit && kFarFirst) {
+      if constexpr (kFarFirst) {
         // Far to near: the farthest child at once, the others popped after it
         // (an occlusion walk keeps t_bound = tmax until it returns, so every
         // pending child is still visited when no hit is found).
