@@ -384,6 +384,7 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
 // blocked by a quad near the light: the any-hit walk gives the same answers
 // in both orders (accel/core/any_hit_order.h), and back to front (the
 // default) reaches the quad before the sphere's cells around the origin.
+// Trees and grids alike (a grid walks the reversed line, grid/dda.h).
 TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
   append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, -4), Vec3f(0, 5, 4));
@@ -404,10 +405,20 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   const size_t blocked = static_cast<size_t>(std::count(ref.begin(), ref.end(), 1));
   ASSERT_GT(blocked, rays.size() / 4);
   ASSERT_LT(blocked, rays.size() * 3 / 4);
-  for (const char* base : {"kdtree", "bsp", "octree"}) {  // every tree with the anyhit order
+  // Every structure that declares the anyhit order (trees and grids), from the registry.
+  std::vector<std::string> bases;
+  for (const auto& info : accelerator_registry()) {
+    for (const auto& p : info.params)
+      if (p.name == "anyhit") bases.push_back(info.name);
+  }
+  for (const char* expected : {"kdtree", "bsp", "octree", "grid", "hashgrid", "grid2", "irgrid"})
+    EXPECT_NE(std::find(bases.begin(), bases.end(), expected), bases.end()) << expected;
+  bases.push_back("grid:storage=implicit");
+  for (const std::string& base : bases) {
     uint64_t steps[2] = {0, 0};
     for (int order = 0; order < 2; ++order) {
-      const std::string spec = std::string(base) + (order == 0 ? ":anyhit=back" : ":anyhit=front");
+      const std::string spec = base + (base.find(':') == std::string::npos ? ":" : ",") +
+                               (order == 0 ? "anyhit=back" : "anyhit=front");
       const Built b = build(spec, mesh);
       std::vector<uint8_t> occ(rays.size());
       TraversalStats st;

@@ -53,6 +53,22 @@ struct DdaRay {
   }
 };
 
+// The same line walked the other way: direction, reciprocal and step
+// negated, the origin kept, so the parameter becomes s = -t and [t0, t1]
+// becomes [-t1, -t0]. Negation is exact, so every point org + s * dir' equals
+// org + t * dir bit for bit: the reversed walk visits the same cells in the
+// opposite order (any-hit walks from the segment's far end,
+// accel/core/any_hit_order.h).
+[[gnu::always_inline]] inline DdaRay reversed(const DdaRay& r) {
+  DdaRay out = r;
+  for (int a = 0; a < 3; ++a) {
+    out.dir[a] = -r.dir[a];
+    out.step[a] = -r.step[a];
+    if (r.step[a] != 0) out.inv_dir[a] = -r.inv_dir[a];
+  }
+  return out;
+}
+
 // Clips [t0, t1] to the box [lo, hi]; false when nothing is left. A zero
 // direction component keeps the interval when the origin lies in the slab
 // (boundaries included) and empties it otherwise.

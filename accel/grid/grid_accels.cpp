@@ -4,6 +4,7 @@
 
 #include <utility>
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/grid/grid_outline.h"
 #include "accel/grid/traverse_hash_grid.h"
@@ -22,7 +23,9 @@ class GridAccel final : public BatchAccelerator<GridAccel<Grid, kBuild>> {
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_grid<kTest, kAnyHit, kCount>(view_, ray, stats);
+    return walk_in_any_hit_order<kAnyHit>(opt_.any_hit_far_first, [&]<bool kFarFirst>() {
+      return traverse_grid<kTest, kAnyHit, kCount, kFarFirst>(view_, ray, stats);
+    });
   }
   void outline(int max_depth, StructureOutline& out) const override { grid_outline(grid_, max_depth, out); }
 

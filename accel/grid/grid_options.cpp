@@ -1,5 +1,6 @@
 #include "accel/grid/grid_options.h"
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/simd_param.h"
 #include "accel/core/triangle_test_param.h"
 
@@ -30,6 +31,7 @@ std::vector<ParamInfo> grid_param_infos(bool with_res, bool with_top) {
                one_of({"exact", "bbox"})});
   p.push_back(triangle_test_param());
   p.push_back(simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)"));
+  p.push_back(any_hit_order_param());
   return p;
 }
 
@@ -47,6 +49,7 @@ GridOptions parse_grid_options(const Params& p, bool with_res, bool with_top) {
   o.assign = p.str("assign") == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
   o.test = parse_triangle_test(p);
   o.simd = parse_simd(p);
+  o.any_hit_far_first = parse_any_hit_far_first(p);
   return o;
 }
 
@@ -61,7 +64,7 @@ void complete_grid_info(AcceleratorInfo& info) {
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
-  info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox", info.name + ":simd=0"};
+  info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox", info.name + ":simd=0", info.name + ":anyhit=front"};
   info.stats = {{"cells", two_level ? "sub-grid cells" : "cells"},
                 {"nonempty_cells", "cells holding at least one triangle"},
                 {"empty_fraction", "fraction of empty cells"},

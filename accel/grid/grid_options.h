@@ -35,6 +35,8 @@ struct GridOptions {
   // grid2 only: sub=cell, each sub-grid covers its whole top cell and all of
   // its triangles (Kalojanov, Billeter & Slusallek 2011); else sub=fit.
   bool whole_cell_subgrids = false;
+  // Any-hit walks start at the segment's far end (accel/core/any_hit_order.h).
+  bool any_hit_far_first = true;
 
   // Cells stored as SIMD triangle blocks (cell_blocks.h).
   bool leaf_blocks() const { return simd && test == TriangleTest::Watertight; }

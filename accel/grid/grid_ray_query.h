@@ -112,7 +112,8 @@ struct SingleLevelGridView {
 // The frame of every grid walk: the recorder, the validity check, the ray
 // clipped to the grid's box; `walk(dr, t0, t1, query)` then walks the cells
 // of [t0, t1] and the recorder's hit is the answer.
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, typename Walk>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false,
+          typename Walk>
 [[gnu::always_inline]] inline Hit walk_grid(const DdaGrid& grid, bool empty, const Ray& ray, TraversalStats* stats,
                                             Walk&& walk) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
@@ -122,7 +123,12 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, t
   double t0 = ray.tmin, t1 = ray.tmax;
   if (!dda_clip(dr, grid.lo, grid.hi, t0, t1)) return Recorder(ray, stats).hit();
   GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
-  walk(dr, t0, t1, q);
+  // Any hit from the far end (accel/core/any_hit_order.h): the walk gets the
+  // reversed line and its parameter range; the triangle tests still use the
+  // ray itself, so the answers are the same.
+  static_assert(!kFarFirst || kAnyHit, "only any-hit walks may change their order");
+  if constexpr (kFarFirst) walk(reversed(dr), -t1, -t0, q);
+  else walk(dr, t0, t1, q);
   return q.rec.hit();
 }
 
@@ -131,10 +137,10 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, t
 // stopping rule above; with a clearance per cell, empty cubes are crossed
 // in one jump (dda_walk_skipping), and a cell's clearance says whether it
 // is empty before its list is looked up.
-template <TriangleTest kTest, bool kAnyHit, bool kCount, typename Cells>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kFarFirst, typename Cells>
 inline Hit traverse_grid(const SingleLevelGridView<Cells>& g, const Ray& ray, TraversalStats* stats) {
   return walk_with_leaf_blocks<kTest>(g, [&]<bool kBlocks>() {
-    return walk_grid<kTest, kAnyHit, kCount, kBlocks>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
+    return walk_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
                                                                                     double t1, auto& q) {
       const auto visit = [&](int64_t cell, double, double t_exit) __attribute__((always_inline)) {
         q.rec.count_nodes(1);

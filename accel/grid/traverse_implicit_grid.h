@@ -16,12 +16,12 @@ struct ImplicitGridView {
 
 inline ImplicitGridView grid_view(const ImplicitGrid& g) { return ImplicitGridView{&g}; }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kFarFirst>
 inline Hit traverse_grid(const ImplicitGridView& v, const Ray& ray, TraversalStats* stats) {
   // Traced before build(): no grid yet, every ray misses.
   static const ImplicitGrid kUnbuilt;
   const ImplicitGrid& g = v.g ? *v.g : kUnbuilt;
-  return walk_grid<kTest, kAnyHit, kCount>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
+  return walk_grid<kTest, kAnyHit, kCount, false, kFarFirst>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
     const int64_t sy = g.dda.stride[1], sz = g.dda.stride[2];
     dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double, double t_exit) {
       q.rec.count_nodes(1);

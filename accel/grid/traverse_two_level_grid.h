@@ -32,13 +32,22 @@ inline TwoLevelGridView grid_view(const TwoLevelGrid& g) {
                           g.blocks.empty() ? nullptr : g.blocks.data(), g.empty};
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks, bool kFarFirst>
 inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
+  static_assert(!kFarFirst || kAnyHit, "only any-hit walks may change their order");
   if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
-  const DdaRay dr(ray);
+  const DdaRay ray_dda(ray);
   double t0 = ray.tmin, t1 = ray.tmax;
-  if (!dda_clip(dr, g.top.lo, g.top.hi, t0, t1)) return Recorder(ray, stats).hit();
+  if (!dda_clip(ray_dda, g.top.lo, g.top.hi, t0, t1)) return Recorder(ray, stats).hit();
+  // Any hit from the far end (accel/core/any_hit_order.h): both levels walk
+  // the reversed line over [-t1, -t0]; the triangle tests use the ray itself.
+  const DdaRay dr = kFarFirst ? reversed(ray_dda) : ray_dda;
+  if constexpr (kFarFirst) {
+    const double s = t0;
+    t0 = -t1;
+    t1 = -s;
+  }
   // Not through walk_grid: one lambda less around the nested walks keeps
   // them inlined (measured 12 % faster on the bunny).
   GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
@@ -54,7 +63,8 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
       if (!content.has_subgrid()) return q.visit_run(g, content.large_begin, content.large_count, t_exit);
       if (content.large_count != 0 && q.test_run(g, content.large_begin, content.large_count)) return true;
       const DdaGrid sub_dda = content.dda();
-      double s0 = t_enter, s1 = t_exit < rec.tmax() ? t_exit : static_cast<double>(rec.tmax());
+      // Closest hit: no farther than the hit so far (any hit: no hit yet).
+      double s0 = t_enter, s1 = kAnyHit || t_exit < rec.tmax() ? t_exit : static_cast<double>(rec.tmax());
       if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
         const uint32_t* offsets = g.offsets + content.offsets_base;
         const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) __attribute__((always_inline)) {
@@ -72,10 +82,11 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
   return rec.hit();
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kFarFirst>
 inline Hit traverse_grid(const TwoLevelGridView& g, const Ray& ray, TraversalStats* stats) {
-  return walk_with_leaf_blocks<kTest>(
-      g, [&]<bool kBlocks>() { return traverse_two_level_grid<kTest, kAnyHit, kCount, kBlocks>(g, ray, stats); });
+  return walk_with_leaf_blocks<kTest>(g, [&]<bool kBlocks>() {
+    return traverse_two_level_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(g, ray, stats);
+  });
 }
 
 }  // namespace raylab

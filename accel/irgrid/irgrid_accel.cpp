@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/simd_param.h"
 #include "accel/core/batch_accelerator.h"
 #include "accel/core/leaf_block_dispatch.h"
@@ -17,16 +18,19 @@ namespace {
 
 class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
  public:
-  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd) : BatchAccelerator(test), opt_(opt) {
+  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd, bool any_hit_far_first)
+      : BatchAccelerator(test), opt_(opt), any_hit_far_first_(any_hit_far_first) {
     opt_.leaf_blocks = leaf_blocks_wanted(simd, test);
   }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    if constexpr (kTest == TriangleTest::Watertight) {
-      if (grid_.leaf_blocks) return traverse_irgrid<kTest, kAnyHit, kCount, true>(grid_, ray, stats);
-    }
-    return traverse_irgrid<kTest, kAnyHit, kCount, false>(grid_, ray, stats);
+    return walk_in_any_hit_order<kAnyHit>(any_hit_far_first_, [&]<bool kFarFirst>() {
+      if constexpr (kTest == TriangleTest::Watertight) {
+        if (grid_.leaf_blocks) return traverse_irgrid<kTest, kAnyHit, kCount, true, kFarFirst>(grid_, ray, stats);
+      }
+      return traverse_irgrid<kTest, kAnyHit, kCount, false, kFarFirst>(grid_, ray, stats);
+    });
   }
 
   // Depth 0: the grid's box; depth 1: every cell's (expanded) box, filled
@@ -59,6 +63,7 @@ class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
   }
 
   IrgridOptions opt_;
+  bool any_hit_far_first_ = true;
   Irgrid grid_;
 };
 
@@ -79,7 +84,7 @@ AcceleratorInfo irgrid_accelerator_info() {
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)",
         boolean_flag()},
        {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()},
-       simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)")},
+       simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)"), any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");
@@ -88,9 +93,9 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.max_depth = p.integer("depth");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
-        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p));
+        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p), parse_any_hit_far_first(p));
       });
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0"};  // both off: tests/test_irgrid.cpp
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0", "irgrid:anyhit=front"};  // both off: tests/test_irgrid.cpp
   info.caps.scalar_variant = "simd=0";
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},

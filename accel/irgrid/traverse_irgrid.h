@@ -38,10 +38,12 @@
 
 namespace raylab {
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false>
+template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false>
 inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stats) {
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
-  return walk_grid<kTest, kAnyHit, kCount, kBlocks>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
+  // kFarFirst: walk_grid hands the walk the reversed line (any hit from the
+  // far end); the expanded boxes' faces serve either direction.
+  return walk_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
                                                                                     double t1, auto& q) {
     int32_t v[3];
     for (int a = 0; a < 3; ++a) v[a] = g.virt.coord(a, dr.org[a] + t0 * dr.dir[a]);
