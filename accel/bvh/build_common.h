@@ -104,7 +104,7 @@ std::vector<BuildRef> make_build_refs(std::span<const Aabb> boxes, std::span<con
 
 // Options shared by the top-down builders.
 struct BuildOptions {
-  int bins = 32;          // bins per axis (binned SAH, SBVH)
+  int bins = 64;          // bins per axis (binned SAH, SBVH; nodes under 1024 references use fewer, build_binned_sah.cpp)
   int max_leaf = 1;       // leaves never hold more references than this
   // Ranges of at most this many references always become leaves (no SAH
   // test): the SAH-optimal collapse merges small leaves anyway, so building

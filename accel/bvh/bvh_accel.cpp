@@ -50,7 +50,7 @@ struct BvhConfig {
   // every field; these only matter to code that builds a config directly).
   int leaf = 16;              // max references per leaf (auto: bvh2 4, wide 2 blocks)
   int block = 8;              // triangles per SIMD block
-  int bins = 32;
+  int bins = 64;
   int binary_leaf = 4;        // ranges this small become binary leaves without SAH test
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
@@ -340,7 +340,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)",
         integer_in(1, 255).or_word("auto")},
        {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)", integer_of({4, 8, 16})},
-       {"bins", "32", "SAH bins per axis (2..256)", integer_in(2, 256)},
+       {"bins", "64", "SAH bins per axis for nodes of 1024 references or more (fewer below: 8 under 128, 16 under 1024), 2..256", integer_in(2, 256)},
        {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse",
         integer_in(1, 16)},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area",
