@@ -414,6 +414,7 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   for (const char* expected : {"kdtree", "bsp", "octree", "grid", "hashgrid", "grid2", "irgrid"})
     EXPECT_NE(std::find(bases.begin(), bases.end(), expected), bases.end()) << expected;
   bases.push_back("grid:storage=implicit");
+  const Reference closest = brute_force(mesh, rays);  // once: the slow part under the sanitizers
   for (const std::string& base : bases) {
     uint64_t steps[2] = {0, 0};
     for (int order = 0; order < 2; ++order) {
@@ -425,8 +426,11 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
       b.accel->occluded(rays, occ, &st);
       EXPECT_EQ(occ, ref) << spec;
       steps[order] = st.nodes_visited;
-      std::string first;
-      EXPECT_EQ(count_mismatches(*b.accel, brute_force(mesh, rays), rays, &first), 0u) << spec << ": " << first;
+      // Closest hits take the same walk in both orders (the order applies to any hit only).
+      if (order == 0) {
+        std::string first;
+        EXPECT_EQ(count_mismatches(*b.accel, closest, rays, &first), 0u) << spec << ": " << first;
+      }
     }
     EXPECT_LT(steps[0], steps[1]) << base << ": node steps back to front " << steps[0] << ", front to back " << steps[1];
   }
