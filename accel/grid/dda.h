@@ -69,6 +69,20 @@ struct DdaRay {
   return out;
 }
 
+// The line and parameter range a walk takes: as given, or (kFarFirst, any
+// hit from the far end) reversed over [-t1, -t0]. One definition for every
+// grid walk; a plain value, not another lambda around the walk (grid2's
+// nested walks stay inlined that way).
+struct DdaSegment {
+  DdaRay ray;
+  double t0, t1;
+};
+template <bool kFarFirst>
+[[gnu::always_inline]] inline DdaSegment walk_order(const DdaRay& r, double t0, double t1) {
+  if constexpr (kFarFirst) return DdaSegment{reversed(r), -t1, -t0};
+  else return DdaSegment{r, t0, t1};
+}
+
 // Clips [t0, t1] to the box [lo, hi]; false when nothing is left. A zero
 // direction component keeps the interval when the origin lies in the slab
 // (boundaries included) and empties it otherwise.

@@ -127,8 +127,8 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, b
   // reversed line and its parameter range; the triangle tests still use the
   // ray itself, so the answers are the same.
   static_assert(!kFarFirst || kAnyHit, "only any-hit walks may change their order");
-  if constexpr (kFarFirst) walk(reversed(dr), -t1, -t0, q);
-  else walk(dr, t0, t1, q);
+  const DdaSegment s = walk_order<kFarFirst>(dr, t0, t1);
+  walk(s.ray, s.t0, s.t1, q);
   return q.rec.hit();
 }
 

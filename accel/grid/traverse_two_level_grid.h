@@ -38,16 +38,13 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
   static_assert(!kFarFirst || kAnyHit, "only any-hit walks may change their order");
   if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
   const DdaRay ray_dda(ray);
-  double t0 = ray.tmin, t1 = ray.tmax;
-  if (!dda_clip(ray_dda, g.top.lo, g.top.hi, t0, t1)) return Recorder(ray, stats).hit();
+  double clip0 = ray.tmin, clip1 = ray.tmax;
+  if (!dda_clip(ray_dda, g.top.lo, g.top.hi, clip0, clip1)) return Recorder(ray, stats).hit();
   // Any hit from the far end (accel/core/any_hit_order.h): both levels walk
-  // the reversed line over [-t1, -t0]; the triangle tests use the ray itself.
-  const DdaRay dr = kFarFirst ? reversed(ray_dda) : ray_dda;
-  if constexpr (kFarFirst) {
-    const double s = t0;
-    t0 = -t1;
-    t1 = -s;
-  }
+  // the reversed line; the triangle tests use the ray itself.
+  const DdaSegment seg = walk_order<kFarFirst>(ray_dda, clip0, clip1);
+  const DdaRay& dr = seg.ray;
+  const double t0 = seg.t0, t1 = seg.t1;
   // Not through walk_grid: one lambda less around the nested walks keeps
   // them inlined (measured 12 % faster on the bunny).
   GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
