@@ -23,7 +23,10 @@ struct Ray {
 };
 
 // True when a ray can be traced: finite origin, finite non-zero direction,
-// tmin and tmax not NaN, and tmin <= tmax. Every accelerator (and the oracle)
+// tmin and tmax not NaN, tmin <= tmax, and tmin < +inf (a segment that starts
+// at infinity is empty; without this rule [+inf, +inf] would accept exactly
+// the hits whose distance overflows to +inf, which structures that widen
+// their intervals by margins cannot all reproduce). Every accelerator (and the oracle)
 // treats a ray failing this as a miss, never as undefined behaviour:
 // intersect() reports no hit, occluded() reports not occluded (tested for
 // every accelerator in test_accelerators.cpp, and by the `rays` scenario of
@@ -36,7 +39,7 @@ inline bool ray_is_valid(const Ray& r) {
     finite &= (r.org[a] - r.org[a] == 0.0f) & (r.dir[a] - r.dir[a] == 0.0f);  // false for inf and NaN
     nonzero |= r.dir[a] != 0.0f;
   }
-  return finite & nonzero & (r.tmin <= r.tmax);  // also false when either is NaN
+  return finite & nonzero & (r.tmin <= r.tmax) & (r.tmin < std::numeric_limits<float>::infinity());  // false for NaN
 }
 
 }  // namespace raylab

@@ -7,8 +7,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <limits>
+#include <utility>
 
 #include "accel/registry.h"
+#include "base/mesh_shapes.h"
 #include "tests/accel_test_util.h"
 #include "tests/test_util.h"
 
@@ -60,6 +63,7 @@ TEST_P(EveryAccelerator, InvalidRaysMiss) {
       Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, nan, 1)),     Ray(Vec3f(inf, 0.5f, 0.5f), Vec3f(-1, 0, 0)),
       Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 1), 2, 1),  // tmin > tmax
       Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 1), nan, 5),
+      Ray(Vec3f(0.5f, 0.5f, -1), Vec3f(0, 0, 0x1p-149f), inf, inf),  // a segment starting at infinity
   };
   std::vector<Hit> hits(rays.size());
   std::vector<uint8_t> occ(rays.size(), 7);
@@ -69,6 +73,86 @@ TEST_P(EveryAccelerator, InvalidRaysMiss) {
     EXPECT_FALSE(hits[i].valid()) << GetParam() << " ray " << i;
     EXPECT_EQ(occ[i], 0) << GetParam() << " ray " << i;
   }
+}
+
+// Valid rays at the edges of float: direction components so small that
+// their reciprocals (and the structures' margins divided by them) overflow,
+// denormal tmin, distances that round to inf, huge directions. Found by
+// fuzz_rays: the BSP tree's clip widened by inf - inf = NaN and its
+// closest-hit walk skipped the tree while its any-hit walk did not. Every
+// structure must give brute force's closest hits and an any-hit answer that
+// agrees with them.
+void expect_extreme_rays_agree(const std::string& spec, const std::string& what, const TriangleMesh& mesh,
+                               const std::vector<Ray>& rays, size_t min_hits) {
+  auto accel = make_accelerator(spec);
+  accel->build(mesh);
+  const test::Disagreement d =
+      test::compare_with_brute(*accel, test::brute_reference(mesh, rays), rays, spec + " on " + what);
+  EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << spec << " on " << what;
+  EXPECT_GE(d.reference_hits, min_hits) << what;
+}
+
+TEST_P(EveryAccelerator, ExtremeValidRaysAgreeWithBruteForce) {
+  TriangleMesh mesh = cornell_box_mesh();
+  for (auto& v : mesh.vertices) v *= 1.0f / 550.0f;  // the unit box, as in fuzz_rays
+  mesh.append(make_uv_sphere(12, 6, Vec3f(0.5f, 0.5f, 0.5f), 0.2f));
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<Vec3f> origins = {Vec3f(0.5f, 0.5000035f, -1.0f), Vec3f(0.3f, 0.6f, 0.45f),
+                                      Vec3f(-2.0f, 0.25f, 0.5f)};
+  const std::vector<Vec3f> directions = {Vec3f(0, 0, 1),    Vec3f(1, 0, 0),      Vec3f(0, -1, 0),
+                                         Vec3f(1, 1, 1),    Vec3f(-1, 1, 0),     Vec3f(0.3f, -0.2f, 0.9f),
+                                         Vec3f(1, 1e-30f, 0), Vec3f(-0.0f, 0, 1)};
+  const std::vector<float> scales = {0x1p-149f, 0x1p-148f, 0x1p-140f, 0x1p-126f, 1e-30f, 1.0f, 1e30f, 0x1p127f};
+  const std::vector<std::pair<float, float>> intervals = {{0.0f, inf}, {0x1p-134f, inf}, {1e-3f, 1e30f}, {1e30f, inf}, {inf, inf}};
+  std::vector<Ray> rays;
+  for (const Vec3f& o : origins)
+    for (const Vec3f& d : directions)
+      for (float s : scales)
+        for (const auto& [t0, t1] : intervals) rays.emplace_back(o, d * s, t0, t1);
+  expect_extreme_rays_agree(GetParam(), "extreme rays in the unit box", mesh, rays, rays.size() / 4);
+}
+
+// Rays with one direction component below 2^-128 (its reciprocal overflows)
+// that reach, at a finite distance, triangles lying beside the origin's
+// coordinate on that axis: the strips stand 2^-121 to 2^-119 off the
+// origin's plane, 1000 units ahead, where the ray has drifted 2^-130 * 1000
+// ~ 2^-120. A slab test with 1 / d = +-inf puts such a box at t = +inf.
+// One scene per pair of (main, tiny) axes; the strips are cut into 16 pieces
+// along the third axis so that trees and grids subdivide them.
+TEST_P(EveryAccelerator, RaysWithOverflowingReciprocalsReachBoxesBesideTheirPlane) {
+  for (int main_axis = 0; main_axis < 3; ++main_axis)
+    for (int tiny_axis = 0; tiny_axis < 3; ++tiny_axis) {
+      if (tiny_axis == main_axis) continue;
+      const int side_axis = 3 - main_axis - tiny_axis;
+      auto point = [&](float m, float t, float s) {
+        Vec3f p;
+        p[main_axis] = m, p[tiny_axis] = t, p[side_axis] = s;
+        return p;
+      };
+      TriangleMesh mesh;
+      for (float sign : {1.0f, -1.0f})
+        for (int k = 0; k < 16; ++k) {
+          const float s0 = -1.0f + k / 8.0f, s1 = s0 + 1.0f / 8.0f;
+          const uint32_t b = static_cast<uint32_t>(mesh.vertices.size());
+          mesh.vertices.push_back(point(1000.0f, sign * 0x1p-121f, s0));
+          mesh.vertices.push_back(point(1000.0f, sign * 0x1p-119f, s0));
+          mesh.vertices.push_back(point(1000.0f, sign * 0x1p-119f, s1));
+          mesh.vertices.push_back(point(1000.0f, sign * 0x1p-121f, s1));
+          mesh.triangles.push_back({b, b + 1, b + 2});
+          mesh.triangles.push_back({b, b + 2, b + 3});
+        }
+      std::vector<Ray> rays;
+      for (float sign : {1.0f, -1.0f})
+        for (int k = 0; k < 32; ++k) {
+          const float side = (k - 15.5f) / 16.0f * 0.0009f;  // lands at 1000 * side in (-0.9, 0.9)
+          rays.emplace_back(Vec3f::Zero(), point(1.0f, sign * 0x1p-130f, side));
+          rays.emplace_back(Vec3f::Zero(), point(1.0f, sign * 0x1p-130f, side), 999.0f, 1001.0f);
+        }
+      expect_extreme_rays_agree(GetParam(),
+                                "strips beside the origin, axes " + std::to_string(main_axis) +
+                                    std::to_string(tiny_axis),
+                                mesh, rays, rays.size() * 9 / 10);
+    }
 }
 
 TEST_P(EveryAccelerator, EmptyAndSingleTriangleScenes) {

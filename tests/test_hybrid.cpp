@@ -119,7 +119,9 @@ TEST(SphereBounds, RitterSphereHoldsEveryPoint) {
   EXPECT_LT(ritter_sphere({}).radius, 0.0f);
 }
 
-// A ray through a point inside the sphere (or on it) is never rejected.
+// A ray through a point inside the sphere (or on it) is never rejected,
+// whatever the direction's length: it is scaled by 2^k for k in [-120, 100]
+// (|dir|^2 then under- or overflows float), the point still at t = 2^-k.
 TEST(SphereBounds, RaySphereTestIsConservative) {
   Pcg32 rng(5, 5);
   for (int i = 0; i < 20000; ++i) {
@@ -128,10 +130,13 @@ TEST(SphereBounds, RaySphereTestIsConservative) {
     const Vec3f c(s.c[0], s.c[1], s.c[2]);
     const Vec3f p = c + s.r * test::random_direction(rng) * (i % 2 ? 1.0f : rng.uniform());
     const Vec3f o = p + scale * 50.0f * test::random_direction(rng);
-    const Ray ray(o, p - o, 0.0f, 1.0f);
+    const int k = i % 4 == 0 ? static_cast<int>(rng.next() % 221) - 120 : 0;  // |dir| < 2^17 before scaling
+    const float t_point = std::ldexp(1.0f, -k);
+    const Ray ray(o, (p - o) * std::ldexp(1.0f, k), 0.0f, t_point);
+    ASSERT_TRUE(ray_is_valid(ray)) << i << " k " << k;
     float t_enter;
-    ASSERT_TRUE(ray_sphere_test(ray, 1.0f / ray.dir.squaredNorm(), s, 0.0f, 1.0f, t_enter)) << i;
-    EXPECT_LE(t_enter, 1.0f);
+    ASSERT_TRUE(ray_sphere_test(SphereRay(ray), s, 0.0f, t_point, t_enter)) << i << " k " << k;
+    EXPECT_LE(t_enter, t_point) << i << " k " << k;
   }
 }
 

@@ -132,8 +132,14 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
     box_mag = std::max(box_mag, std::max(std::fabs(tree.bounds.lo[k]), std::fabs(tree.bounds.hi[k])));
   }
   const float delta_g = std::max(kBspGeneralMarginScale * (m + org_mag + box_mag), std::numeric_limits<float>::min());
-  const float delta_t = std::max(kr.delta_t, delta_g / dir.cwiseAbs().maxCoeff());
-  float t0 = kr.t0 - delta_t + kr.delta_t, t1 = kr.t1 + delta_t - kr.delta_t;
+  // Capped at FLT_MAX as the k-d tree's (kd_enter_root), so that widening
+  // the k-d tree's clip by the difference never computes inf - inf = NaN,
+  // which made every interval test false and skipped the tree (fuzz_rays:
+  // a direction of 2^-148).
+  const float delta_t =
+      std::min(std::max(kr.delta_t, delta_g / dir.cwiseAbs().maxCoeff()), std::numeric_limits<float>::max());
+  const float widen = delta_t - kr.delta_t;
+  float t0 = kr.t0 - widen, t1 = kr.t1 + widen;
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
   using LeafRay = std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, TrianglePrecompute<kTest>>;
   const LeafRay pre(ray);

@@ -11,6 +11,11 @@
 // padded by 2^-16 of |c - o| + r, far above the few ulps that float rounding
 // of these products can lose; the entry and exit distances are padded the
 // same way. A sphere the ray really crosses is therefore never missed.
+// The test runs on the direction scaled by a power of two to a largest
+// component in [0.5, 1) (exact; distances scale back exactly, in two
+// factors so that no factor over- or underflows): |dir|^2 of a valid ray
+// can underflow to 0 (components near 2^-149) or overflow to inf (near
+// 2^127), and 1 / |dir|^2 would then be inf or 0 and miss every sphere.
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -60,21 +65,41 @@ struct SphereBvhView {
 
 inline constexpr float kSpherePad = 0x1p-16f;
 
+// The ray with its direction scaled to a largest component in [0.5, 1):
+// dir = unit_dir * 2^e, so t = t' * 2^-e, applied as two factors (2^-e
+// alone may not be a float: e ranges over [-148, 128]).
+struct SphereRay {
+  Vec3f org, dir;   // dir scaled by 2^-e
+  float inv_dd;     // 1 / |scaled dir|^2, in (0.33, 4]
+  float back_a, back_b;  // 2^-e = back_a * back_b
+
+  explicit SphereRay(const Ray& ray) : org(ray.org) {
+    int e = 0;
+    std::frexp(ray.dir.cwiseAbs().maxCoeff(), &e);
+    dir = Vec3f(std::ldexp(ray.dir[0], -e), std::ldexp(ray.dir[1], -e), std::ldexp(ray.dir[2], -e));
+    inv_dd = 1.0f / dir.squaredNorm();
+    back_a = std::ldexp(1.0f, -e / 2);
+    back_b = std::ldexp(1.0f, -e - (-e / 2));
+  }
+};
+
 // The ray against one sphere: entry distance when [tmin, tmax] overlaps the
 // (padded) chord.
-[[gnu::always_inline]] inline bool ray_sphere_test(const Ray& ray, float inv_dd, const SphereNode& s, float tmin,
-                                                   float tmax, float& t_enter) {
+[[gnu::always_inline]] inline bool ray_sphere_test(const SphereRay& ray, const SphereNode& s, float tmin, float tmax,
+                                                   float& t_enter) {
   const Vec3f oc(s.c[0] - ray.org[0], s.c[1] - ray.org[1], s.c[2] - ray.org[2]);
-  const float tca = oc.dot(ray.dir) * inv_dd;  // closest approach
+  const float tca = oc.dot(ray.dir) * ray.inv_dd;  // closest approach, in scaled units
   const Vec3f perp = oc - tca * ray.dir;
   const float pad = kSpherePad * (oc.cwiseAbs().maxCoeff() + s.r);
   const float rr = s.r + pad;
   const float h2 = rr * rr - perp.squaredNorm();
   if (!(h2 >= 0.0f)) return false;
-  const float half_chord = std::sqrt(h2 * inv_dd);
+  const float half_chord = std::sqrt(h2 * ray.inv_dd);
   const float t_pad = kSpherePad * (std::fabs(tca) + half_chord);
-  t_enter = tca - half_chord - t_pad;
-  const float t_exit = tca + half_chord + t_pad;
+  // Back to the ray's own distances (exact unless the result over- or
+  // underflows: beyond FLT_MAX it is +-inf, which keeps the test conservative).
+  t_enter = (tca - half_chord - t_pad) * ray.back_a * ray.back_b;
+  const float t_exit = (tca + half_chord + t_pad) * ray.back_a * ray.back_b;
   return t_enter <= tmax && t_exit >= tmin;
 }
 
@@ -82,10 +107,10 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_sphere_bvh(const SphereBvhView& bvh, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
-  const float inv_dd = 1.0f / ray.dir.squaredNorm();
+  const SphereRay sray(ray);
   return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
                                 [&](const SphereNode& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
-                                  return ray_sphere_test(ray, inv_dd, n, tmin, bound, t);
+                                  return ray_sphere_test(sray, n, tmin, bound, t);
                                 });
 }
 

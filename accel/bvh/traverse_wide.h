@@ -133,6 +133,9 @@ template <int N>
   const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
   alignas(16) float invv[4], upv[4], downv[4];
   _mm_store_ps(invv, inv4);
+  // Exact reciprocals of components below 2^-128 overflow: NaN, as SlabRay.
+  if (axis_parallel)
+    for (int a = 0; a < 3; ++a) invv[a] = safe_slab_reciprocal(r.dir[a]);
   _mm_store_ps(upv, up);
   _mm_store_ps(downv, down);
   for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
@@ -141,7 +144,7 @@ template <int N>
   const SlabRay sr(r);
   int neg_mask = 0;
   for (int a = 0; a < 3; ++a) {
-    inv[a] = axis_parallel ? 1.0f / r.dir[a] : sr.inv_dir[a];
+    inv[a] = sr.inv_dir[a];
     neg_mask |= sr.neg[a] << a;
     const float oi = r.org[a] * inv[a];
     const float delta = std::fabs(oi) * 0x1p-22f + FLT_MIN;

@@ -16,6 +16,12 @@
 // components by +-1e-30; then (face - org) * (1 / -1e-30) = -0 ended the slab
 // at t = 0 for a ray lying in a face plane with a -0 (or, on the other face,
 // +0) component, and every box touching that plane was lost for tmin > 0.
+//
+// A nonzero component so small that its reciprocal overflows (|d| < 2^-128)
+// gets NaN instead of +-inf: the slab is then unbounded. With +-inf a box
+// beside the origin's coordinate on that axis would get an entry distance of
+// +inf, although the ray reaches it at a finite (if large) t; the hybrid's
+// cell trees, whose boxes lie in cells, lost hits that way.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,6 +38,13 @@ inline constexpr float kSlabFarScaleNeg = 1.0f - 2.0f * kFloatGamma3;
 // A far distance padded outward: up when positive, towards zero when negative.
 inline float pad_far(float t) { return t * (t >= 0.0f ? kSlabFarScale : kSlabFarScaleNeg); }
 
+// 1 / d for the slab test: +-inf for +-0, NaN when a nonzero d's
+// reciprocal overflows (see the comment at the top).
+inline float safe_slab_reciprocal(float d) {
+  const float inv = 1.0f / d;
+  return d != 0.0f && std::isinf(inv) ? std::numeric_limits<float>::quiet_NaN() : inv;
+}
+
 struct SlabRay {
   Vec3f org;
   Vec3f inv_dir;
@@ -40,7 +53,7 @@ struct SlabRay {
   SlabRay() = default;
   explicit SlabRay(const Ray& r) : org(r.org) {
     for (int i = 0; i < 3; ++i) {
-      inv_dir[i] = 1.0f / r.dir[i];  // +-inf for +-0 (see the comment at the top)
+      inv_dir[i] = safe_slab_reciprocal(r.dir[i]);
       neg[i] = std::signbit(r.dir[i]) ? 1 : 0;
     }
   }
