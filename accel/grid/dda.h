@@ -101,6 +101,50 @@ template <bool kFarFirst>
   return t0 <= t1;
 }
 
+// The line a grid walk follows, rebased for rays from far away. The walk
+// finds cells from points org + t * dir and crossing distances
+// (plane - org) / dir; for an origin at distance D from the grid both carry
+// rounding errors of about D * 2^-53, which for D = 2^50 is a quarter of a
+// unit: the walk then starts or ends cells away from where the ray enters
+// and leaves a unit-sized scene, and misses triangles (found by fuzz_rays: a
+// ray from z = -2^50 along +z into the unit box, whose closest-hit walk
+// stopped one cell short of the back wall). So when the origin lies more
+// than kDdaRebaseFactor box extents outside the box, the walk starts from
+// the point of the line at the clipped entry parameter t_base, computed with
+// one rounding (fused multiply-add: a point of the line to within an ulp of
+// the box's coordinates), and its parameter is s = t - t_base; [tmin, tmax]
+// becomes [tmin - t_base, tmax - t_base], widened by a few ulps of t_base
+// (the entry parameter's own error). The triangle tests keep the ray, so the
+// answers are the ray's; a walker compares hit distances with t_base + s.
+// Nearer origins keep the plain line (t_base = 0): their errors are at most
+// 2^16 extents * 2^-53 = 2^-37 of the grid's extent, far below the cell margin.
+inline constexpr double kDdaRebaseFactor = 65536.0;
+
+struct DdaLine {
+  DdaRay ray;
+  double t_base = 0.0;      // t = t_base + s
+  double smin, smax;        // the ray's [tmin, tmax] in the walk's parameter s
+};
+
+[[gnu::always_inline]] inline DdaLine dda_line(const Ray& r, const double lo[3], const double hi[3]) {
+  DdaLine line{DdaRay(r), 0.0, r.tmin, r.tmax};
+  double outside = 0.0, extent = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    extent = std::max(extent, hi[a] - lo[a]);
+    outside = std::max(outside, std::max(lo[a] - line.ray.org[a], line.ray.org[a] - hi[a]));
+  }
+  if (!(outside > kDdaRebaseFactor * extent)) [[likely]]
+    return line;
+  double t0 = r.tmin, t1 = r.tmax;
+  if (!dda_clip(line.ray, lo, hi, t0, t1)) return line;  // a miss either way
+  line.t_base = t0;
+  for (int a = 0; a < 3; ++a) line.ray.org[a] = std::fma(t0, line.ray.dir[a], line.ray.org[a]);
+  const double pad = std::fabs(t0) * 0x1p-48;
+  line.smin = (static_cast<double>(r.tmin) - t0) - pad;
+  line.smax = (static_cast<double>(r.tmax) - t0) + pad;
+  return line;
+}
+
 // Walks the cells of `g` that the ray crosses over [t0, t1], which must
 // already be clipped to the grid's box. Calls visit(linear_index, t_enter,
 // t_exit) for each cell in order; the walk stops when visit returns true

@@ -39,6 +39,9 @@ struct GridRayQuery {
   // the grids 5-20 %).
   Recorder rec;
   [[no_unique_address]] std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, NoBlockRay> block_ray;
+  // The walk's parameter origin (dda.h, dda_line): t = t_base + s, 0 unless
+  // the ray comes from far away.
+  double t_base = 0.0;
 
   GridRayQuery(const Ray& r, TraversalStats* stats) : ray(r), pre(r), rec(r, stats) {
     if constexpr (kBlocks) block_ray.init(pre.w);
@@ -81,8 +84,9 @@ struct GridRayQuery {
     else return test_cell(g.refs + begin, count, g.tris);
   }
 
-  // Closest hit: true once the best hit lies within [.., t_exit].
-  bool done_at(double t_exit) const { return rec.found() && static_cast<double>(rec.hit().t) <= t_exit; }
+  // Closest hit: true once the best hit lies within [.., t_exit] (t_exit in
+  // the walk's parameter).
+  bool done_at(double t_exit) const { return rec.found() && static_cast<double>(rec.hit().t) <= t_base + t_exit; }
 
   // One cell entered by the walk: test its run, then apply the stopping rule.
   template <typename View>
@@ -109,8 +113,8 @@ struct SingleLevelGridView {
   bool empty = true;
 };
 
-// The frame of every grid walk: the recorder, the validity check, the ray
-// clipped to the grid's box; `walk(dr, t0, t1, query)` then walks the cells
+// The frame of every grid walk: the recorder, the validity check, the ray's
+// line (rebased when it comes from far away, dda_line) clipped to the grid's box; `walk(dr, t0, t1, query)` then walks the cells
 // of [t0, t1] and the recorder's hit is the answer.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false,
           typename Walk>
@@ -119,15 +123,16 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, b
   using Recorder = HitRecorder<kAnyHit, kCount>;
   // A ray that never reaches the cells still counts (the recorder counts it).
   if (empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
-  const DdaRay dr(ray);
-  double t0 = ray.tmin, t1 = ray.tmax;
-  if (!dda_clip(dr, grid.lo, grid.hi, t0, t1)) return Recorder(ray, stats).hit();
+  const DdaLine line = dda_line(ray, grid.lo, grid.hi);
+  double t0 = line.smin, t1 = line.smax;
+  if (!dda_clip(line.ray, grid.lo, grid.hi, t0, t1)) return Recorder(ray, stats).hit();
   GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
+  q.t_base = line.t_base;
   // Any hit from the far end (accel/core/any_hit_order.h): the walk gets the
   // reversed line and its parameter range; the triangle tests still use the
   // ray itself, so the answers are the same.
   static_assert(!kFarFirst || kAnyHit, "only any-hit walks may change their order");
-  const DdaSegment s = walk_order<kFarFirst>(dr, t0, t1);
+  const DdaSegment s = walk_order<kFarFirst>(line.ray, t0, t1);
   walk(s.ray, s.t0, s.t1, q);
   return q.rec.hit();
 }

@@ -67,7 +67,19 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
   if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
-  const DdaRay dr(ray);
+  // Rebased on the levels' common box when the ray comes from far away
+  // (dda.h, dda_line): walk parameters are s = t - t_base.
+  double box_lo[3], box_hi[3];
+  for (int a = 0; a < 3; ++a) {
+    box_lo[a] = std::numeric_limits<double>::infinity();
+    box_hi[a] = -std::numeric_limits<double>::infinity();
+    for (const HgridLevel& L : g.levels) {
+      box_lo[a] = std::min(box_lo[a], L.grid.lo[a]);
+      box_hi[a] = std::max(box_hi[a], L.grid.hi[a]);
+    }
+  }
+  const DdaLine line = dda_line(ray, box_lo, box_hi);
+  const DdaRay& dr = line.ray;
   HgridWalk walks[kHgridMaxLevels];
   int active = 0;
   for (const HgridLevel& L : g.levels) {
@@ -77,7 +89,7 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
       lo[a] = L.grid.lo[a] - margin[a];
       hi[a] = L.grid.hi[a] + margin[a];
     }
-    double t0 = ray.tmin, t1 = ray.tmax;
+    double t0 = line.smin, t1 = line.smax;
     if (!dda_clip(dr, lo, hi, t0, t1)) continue;
     walks[active++].start(L.grid, L.level, dr, t0, t1);
   }
@@ -92,7 +104,7 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
     for (int i = 1; i < active; ++i)
       if (walks[i].t_enter < walks[best].t_enter) best = i;
     HgridWalk& w = walks[best];
-    if (q.rec.found() && w.t_enter > static_cast<double>(q.rec.hit().t)) break;  // no closer hit can follow
+    if (q.rec.found() && line.t_base + w.t_enter > static_cast<double>(q.rec.hit().t)) break;  // no closer hit can follow
     q.rec.count_nodes(1);
     if (g.neighbours == HgridNeighbours::Store) {
       if (test(w.level, w.index)) break;  // any hit: found

@@ -46,15 +46,18 @@ inline Hit traverse_grid_of_trees(const GridOfTreesView<View>& g, const Ray& ray
                                   Inner&& inner) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);  // counts the ray; holds the answer
   if (g.empty || !ray_is_valid(ray)) return rec.hit();
-  const DdaRay dr(ray);
-  double t0 = ray.tmin, t1 = ray.tmax;
+  const DdaLine line = dda_line(ray, g.dda.lo, g.dda.hi);  // rebased when from far away (dda.h)
+  const DdaRay& dr = line.ray;
+  const double t_base = line.t_base;
+  double t0 = line.smin, t1 = line.smax;
   if (!dda_clip(dr, g.dda.lo, g.dda.hi, t0, t1)) return rec.hit();
   const float dir_max = ray.dir.cwiseAbs().maxCoeff();
   const double min_cell = std::min({g.dda.cell[0], g.dda.cell[1], g.dda.cell[2]});
   const double pad_base = kCellIntervalPad * min_cell / dir_max;
   TraversalStats inner_stats;
-  dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double t_enter, double t_exit) {
+  dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double s_enter, double s_exit) {
     rec.count_nodes(1);
+    const double t_enter = t_base + s_enter, t_exit = t_base + s_exit;
     const uint32_t tree = g.cell_tree[cell];
     if (tree == kNoCellTree) return false;
     // Pad also by a relative amount of t: float rounding of large t.
@@ -67,7 +70,7 @@ inline Hit traverse_grid_of_trees(const GridOfTreesView<View>& g, const Ray& ray
     // The last cell keeps the whole remaining segment (hits rounded just
     // past the grid's far side).
     const float bound = rec.tmax();
-    sub.tmax = t_exit >= t1 ? bound : std::min(bound, static_cast<float>(t_exit + pad));
+    sub.tmax = s_exit >= t1 ? bound : std::min(bound, static_cast<float>(t_exit + pad));
     if (!(sub.tmin <= sub.tmax)) return false;
     const Hit h = inner(g.views[tree], sub, kCount ? &inner_stats : nullptr);
     if (h.valid()) {
