@@ -6,7 +6,10 @@
 
 namespace raylab {
 
-// A ray segment: points org + t * dir for t in [tmin, tmax].
+// A ray segment: points org + t * dir for t in [tmin, tmax]. A hit's
+// distance is a finite float: a triangle met beyond FLT_MAX (tmax = +inf
+// with a tiny direction or a far origin) is a miss, as for Embree
+// (accel/core/hit_recorder.h).
 // dir need not be normalised; t is measured in units of |dir|.
 struct Ray {
   Vec3f org = Vec3f::Zero();

@@ -58,10 +58,16 @@ ExactEval exact_eval(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ra
   return e;
 }
 
+// A hit's distance must be a finite float (accel/core/hit_recorder.h): the
+// segment ends at FLT_MAX even when tmax = +inf.
+double effective_tmax(const Ray& ray) {
+  return std::min(static_cast<double>(ray.tmax), static_cast<double>(std::numeric_limits<float>::max()));
+}
+
 bool exact_in_range(const mpq_class& t, const Ray& ray) {
   if (std::isfinite(ray.tmin) && t < mpq_class(static_cast<double>(ray.tmin))) return false;
   if (ray.tmin == std::numeric_limits<float>::infinity()) return false;
-  if (std::isfinite(ray.tmax) && t > mpq_class(static_cast<double>(ray.tmax))) return false;
+  if (t > mpq_class(effective_tmax(ray))) return false;
   if (ray.tmax == -std::numeric_limits<float>::infinity()) return false;
   return true;
 }
@@ -126,7 +132,7 @@ DoubleEval double_eval(const RayD& r, const Vec3f& p0, const Vec3f& p1, const Ve
 
 // Range check with an uncertainty band; nullopt = undecided in double.
 std::optional<bool> double_in_range(double t, double err, const Ray& ray) {
-  const double lo = ray.tmin, hi = ray.tmax;
+  const double lo = ray.tmin, hi = effective_tmax(ray);
   if (!(t - err >= lo || t + err < lo)) return std::nullopt;
   if (!(t + err <= hi || t - err > hi)) return std::nullopt;
   return t >= lo && t <= hi;
@@ -242,7 +248,7 @@ OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double gr
   OracleHit best;
   if (!ray_is_valid(ray)) return best;
   const RayD rd(ray);
-  const double tmin = ray.tmin, tmax = ray.tmax;
+  const double tmin = ray.tmin, tmax = effective_tmax(ray);
   std::vector<Candidate> cands;
 
   for (size_t i = 0; i < mesh.num_triangles(); ++i) {

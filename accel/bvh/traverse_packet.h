@@ -76,7 +76,7 @@ struct PacketInput {
       const Ray& r = rays[i];
       for (int a = 0; a < 3; ++a) org[a][i] = r.org[a], dir[a][i] = r.dir[a];
       tmin[i] = r.tmin;
-      tmax[i] = r.tmax;
+      tmax[i] = std::min(r.tmax, std::numeric_limits<float>::max());  // as HitRecorder: finite hits only
     }
   }
 

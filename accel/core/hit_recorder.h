@@ -14,7 +14,9 @@
 //    each cell the walk enters (top cells and sub-grid cells alike);
 //  - a triangle test: one ray-triangle test (SIMD blocks count their
 //    distinct triangles).
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 
 #include "accel/accelerator.h"
 #include "base/hit.h"
@@ -28,7 +30,14 @@ class HitRecorder {
   // Any hit ends the walk at the first hit kept.
   static constexpr bool kStopAtFirstHit = kAnyHit;
 
-  HitRecorder(const Ray& ray, TraversalStats* stats) : tmax_(ray.tmax), stats_(stats) {
+  // The bound starts at the ray's tmax, but at most FLT_MAX: a hit's
+  // distance is a finite float. A triangle met beyond FLT_MAX (a tiny
+  // direction, a far origin) rounds to t = +inf, the miss value of Hit::t;
+  // it is a miss for every structure, as for Embree (found by fuzz_rays: the
+  // grids' and trees' walks could not all agree on which of several hits at
+  // +inf comes first).
+  HitRecorder(const Ray& ray, TraversalStats* stats)
+      : tmax_(std::min(ray.tmax, std::numeric_limits<float>::max())), stats_(stats) {
     if constexpr (kCount) stats_->rays++;
   }
 
