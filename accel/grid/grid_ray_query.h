@@ -114,8 +114,9 @@ struct SingleLevelGridView {
 };
 
 // The frame of every grid walk: the recorder, the validity check, the ray's
-// line (rebased when it comes from far away, dda_line) clipped to the grid's box; `walk(dr, t0, t1, query)` then walks the cells
-// of [t0, t1] and the recorder's hit is the answer.
+// line (rebased when it comes from far away, dda_line) clipped to the grid's
+// box; `walk(dr, t0, t1, query)` then walks the cells of [t0, t1] and the
+// recorder's hit is the answer.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false,
           typename Walk>
 [[gnu::always_inline]] inline Hit walk_grid(const DdaGrid& grid, bool empty, const Ray& ray, TraversalStats* stats,

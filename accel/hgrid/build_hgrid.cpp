@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -88,6 +89,14 @@ std::vector<int> make_level_grids(Hgrid& g, const std::vector<uint8_t>& level, i
     slot_of_level[l] = static_cast<int>(g.levels.size());
     g.levels.push_back(HgridLevel{l, make_dda_grid_from_cells(glo, cells, res)});
     g.level_mask |= uint64_t{1} << l;
+  }
+  for (int a = 0; a < 3; ++a) {
+    g.lo[a] = std::numeric_limits<double>::infinity();
+    g.hi[a] = -std::numeric_limits<double>::infinity();
+    for (const HgridLevel& L : g.levels) {
+      g.lo[a] = std::min(g.lo[a], L.grid.lo[a]);
+      g.hi[a] = std::max(g.hi[a], L.grid.hi[a]);
+    }
   }
   return slot_of_level;
 }

@@ -47,6 +47,8 @@ struct Hgrid {
   std::vector<uint32_t> refs;  // cell lists: indices into tris
   std::vector<LeafTriangle> tris;
   HgridNeighbours neighbours = HgridNeighbours::Store;
+  // The levels' common box: where a ray from far away is rebased (dda.h, dda_line).
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
   bool empty = true;
 };
 

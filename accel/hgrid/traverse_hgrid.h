@@ -69,16 +69,7 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
   if (g.empty || !ray_is_valid(ray)) return Recorder(ray, stats).hit();
   // Rebased on the levels' common box when the ray comes from far away
   // (dda.h, dda_line): walk parameters are s = t - t_base.
-  double box_lo[3], box_hi[3];
-  for (int a = 0; a < 3; ++a) {
-    box_lo[a] = std::numeric_limits<double>::infinity();
-    box_hi[a] = -std::numeric_limits<double>::infinity();
-    for (const HgridLevel& L : g.levels) {
-      box_lo[a] = std::min(box_lo[a], L.grid.lo[a]);
-      box_hi[a] = std::max(box_hi[a], L.grid.hi[a]);
-    }
-  }
-  const DdaLine line = dda_line(ray, box_lo, box_hi);
+  const DdaLine line = dda_line(ray, g.lo, g.hi);
   const DdaRay& dr = line.ray;
   HgridWalk walks[kHgridMaxLevels];
   int active = 0;

@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 #include "accel/core/hit_recorder.h"
 #include "accel/grid/dda.h"
@@ -63,10 +62,7 @@ inline Hit traverse_grid_of_trees(const GridOfTreesView<View>& g, const Ray& ray
     // Pad also by a relative amount of t: float rounding of large t.
     const double pad = pad_base + 1e-6 * std::max(std::fabs(t_enter), std::fabs(t_exit));
     Ray sub = ray;
-    // At most FLT_MAX: a cell entered beyond it (a tiny direction) would
-    // otherwise give tmin = +inf, an invalid sub-ray, and lose the hits whose
-    // distance rounds to +inf.
-    sub.tmin = std::max(ray.tmin, static_cast<float>(std::min(t_enter - pad, double{std::numeric_limits<float>::max()})));
+    sub.tmin = std::max(ray.tmin, static_cast<float>(t_enter - pad));
     // The last cell keeps the whole remaining segment (hits rounded just
     // past the grid's far side).
     const float bound = rec.tmax();

@@ -91,10 +91,9 @@ struct KdRay {
     dir_max = std::max(dir_max, std::fabs(ray.dir[k]));
   }
   const float delta = std::max(kKdMarginScale * m, std::numeric_limits<float>::min());
-  // Capped at FLT_MAX: for a tiny direction delta / dir_max overflows, and a
-  // ray with tmin = +inf (valid: tmin <= tmax = +inf) would clip to
-  // inf - inf = NaN and miss the hits at t = inf that the test reports for
-  // distances beyond FLT_MAX.
+  // Capped at FLT_MAX: for a tiny direction delta / dir_max overflows, and
+  // the BSP tree widens this clip by the difference of its own margin and
+  // this one (traverse_bsp.h), which must not be inf - inf = NaN.
   kr.delta_t = std::min(delta / dir_max, std::numeric_limits<float>::max());
 
   // Exact IEEE reciprocals: +-0 gives +-inf (parallel rays); a denormal
