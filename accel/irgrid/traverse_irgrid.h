@@ -29,6 +29,7 @@
 // triangles are tested 4 at a time by the SIMD watertight test; simd=0 runs
 // the same walk with the scalar test, so both give the same hits and count
 // the same work (a mailbox cannot skip single lanes of a block).
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -47,6 +48,28 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
                                                                                     double t1, auto& q) {
     int32_t v[3];
     for (int a = 0; a < 3; ++a) v[a] = g.virt.coord(a, dr.org[a] + t0 * dr.dir[a]);
+    // Per-ray constants of the step (one FMA per axis instead of four
+    // dependent operations): the distance to virtual boundary c on axis a is
+    // c * exit_scale + exit_base, +inf on an axis the ray does not move
+    // along; the virtual coordinate of the point at distance t is
+    // floor(t * voxel_scale + voxel_base). They round differently from
+    // boundary() and coord(), by a few ulps in double, far below the cells'
+    // assignment margin (dda_grid.h), and the clamping below keeps the walk
+    // monotone whatever the rounding.
+    double exit_scale[3], exit_base[3], voxel_scale[3], voxel_base[3];
+    int face_hi[3];  // 1: the ray leaves a box through its hi face on axis a
+    for (int a = 0; a < 3; ++a) {
+      face_hi[a] = dr.step[a] > 0;
+      voxel_scale[a] = dr.dir[a] * g.virt.inv_cell[a];
+      voxel_base[a] = (dr.org[a] - g.virt.lo[a]) * g.virt.inv_cell[a];
+      if (dr.step[a] == 0) {
+        exit_scale[a] = 0.0;
+        exit_base[a] = std::numeric_limits<double>::infinity();
+      } else {
+        exit_scale[a] = g.virt.cell[a] * dr.inv_dir[a];
+        exit_base[a] = (g.virt.lo[a] - dr.org[a]) * dr.inv_dir[a];
+      }
+    }
     const IrgridCell* cells = g.cells.data();
     const uint32_t* refs = g.refs.data();
     const LeafTriangle* tris = g.tris.data();
@@ -61,23 +84,21 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
       // With blocks, `cur` is the cell's slab position (irgrid.h).
       const IrgridCell& c = kBlocks ? g.slab_cell(cur) : cells[cur];
       q.rec.count_nodes(1);
-      double t_exit = std::numeric_limits<double>::infinity();
-      int exit_axis = -1;
-      for (int a = 0; a < 3; ++a) {
-        if (dr.step[a] == 0) continue;
-        const double t = (g.virt.boundary(a, dr.step[a] > 0 ? c.hi[a] : c.lo[a]) - dr.org[a]) * dr.inv_dir[a];
-        if (t < t_exit) {
-          t_exit = t;
-          exit_axis = a;
-        }
-      }
+      double t_face[3];
+      for (int a = 0; a < 3; ++a)
+        t_face[a] = std::fma(static_cast<double>(face_hi[a] ? c.hi[a] : c.lo[a]), exit_scale[a], exit_base[a]);
+      // The nearest face; ties to x, then y (a valid ray moves along some axis).
+      int exit_axis = t_face[1] < t_face[0] ? 1 : 0;
+      exit_axis = t_face[2] < t_face[exit_axis] ? 2 : exit_axis;
+      const double t_exit = t_face[exit_axis];
       // The next voxel, then its cell (none past the ray's end or the grid).
       bool last = !(t_exit < t1);
       uint32_t next = 0;
       if (!last) {
         for (int a = 0; a < 3; ++a) {
           if (a == exit_axis || dr.step[a] == 0) continue;
-          const int32_t at = g.virt.coord(a, dr.org[a] + t_exit * dr.dir[a]);
+          const double f = std::floor(std::fma(t_exit, voxel_scale[a], voxel_base[a]));
+          const int32_t at = !(f >= 0.0) ? 0 : (f >= g.virt.res[a] ? g.virt.res[a] - 1 : static_cast<int32_t>(f));
           if (dr.step[a] > 0) v[a] = at < v[a] ? v[a] : (at >= c.hi[a] ? c.hi[a] - 1 : at);
           else v[a] = at > v[a] ? v[a] : (at < c.lo[a] ? c.lo[a] : at);
         }
