@@ -27,7 +27,7 @@ namespace raylab {
 
 // kBlocks: the grid's cells hold 4-wide SIMD triangle blocks (cell_blocks.h,
 // simd=1 with the watertight test) instead of ids into triangle copies.
-template <TriangleTest kTest, typename Recorder, bool kBlocks = false>
+template <TriangleTest kTest, typename Recorder, bool kBlocks = false, int kBlockWidth = kKdBlockWidth>
 struct GridRayQuery {
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD blocks run the watertight test");
   struct NoBlockRay {};
@@ -38,7 +38,7 @@ struct GridRayQuery {
   // in this one object (measured: a reference to an outer recorder costs
   // the grids 5-20 %).
   Recorder rec;
-  [[no_unique_address]] std::conditional_t<kBlocks, BlockRay<kKdBlockWidth>, NoBlockRay> block_ray;
+  [[no_unique_address]] std::conditional_t<kBlocks, BlockRay<kBlockWidth>, NoBlockRay> block_ray;
   // The walk's parameter origin (dda.h, dda_line): t = t_base + s, 0 unless
   // the ray comes from far away.
   double t_base = 0.0;
@@ -118,7 +118,7 @@ struct SingleLevelGridView {
 // box; `walk(dr, t0, t1, query)` then walks the cells of [t0, t1] and the
 // recorder's hit is the answer.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false,
-          typename Walk>
+          int kBlockWidth = kKdBlockWidth, typename Walk>
 [[gnu::always_inline]] inline Hit walk_grid(const DdaGrid& grid, bool empty, const Ray& ray, TraversalStats* stats,
                                             Walk&& walk) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
@@ -127,7 +127,7 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, b
   const DdaLine line = dda_line(ray, grid.lo, grid.hi);
   double t0 = line.smin, t1 = line.smax;
   if (!dda_clip(line.ray, grid.lo, grid.hi, t0, t1)) return Recorder(ray, stats).hit();
-  GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
+  GridRayQuery<kTest, Recorder, kBlocks, kBlockWidth> q(ray, stats);
   q.t_base = line.t_base;
   // Any hit from the far end (accel/core/any_hit_order.h): the walk gets the
   // reversed line and its parameter range; the triangle tests still use the

@@ -457,7 +457,7 @@ void IrgridBuilder::finish(BuildStats& stats) {
 }
 
 // Leaf blocks (irgrid.h): each cell's record followed by its list as
-// kd_leaf_blocks(count) 4-wide blocks, cells in order, and the voxel map's
+// irgrid_blocks(count) blocks, cells in order, and the voxel map's
 // leaf entries rewritten from cell ids to record positions. The slabs
 // replace the cells, the ids and the triangle copies.
 void IrgridBuilder::make_leaf_blocks(const TriangleMesh& mesh) {
@@ -471,10 +471,10 @@ void IrgridBuilder::make_leaf_blocks(const TriangleMesh& mesh) {
     IrgridChunk* slab = g_.slabs.data() + at[i];
     c.begin = static_cast<uint32_t>(at[i] + 1);
     new (slab) IrgridCell(c);
-    for (uint32_t k = 0; k < c.count; k += kKdBlockWidth) {
-      auto* blk = new (slab + 1 + (k / kKdBlockWidth) * kIrgridChunksPerBlock) KdTriangleBlock;
-      fill_block<kKdBlockWidth>(*blk, ids + k, static_cast<int>(std::min<uint32_t>(c.count - k, kKdBlockWidth)),
-                                [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+    for (uint32_t k = 0; k < c.count; k += kIrgridBlockWidth) {
+      auto* blk = new (slab + 1 + (k / kIrgridBlockWidth) * kIrgridChunksPerBlock) IrgridTriangleBlock;
+      fill_block<kIrgridBlockWidth>(*blk, ids + k, static_cast<int>(std::min<uint32_t>(c.count - k, kIrgridBlockWidth)),
+                                    [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
     }
   });
   auto to_slab = [&](uint32_t& e) {

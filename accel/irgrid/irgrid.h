@@ -40,18 +40,26 @@ namespace raylab {
 struct IrgridCell {
   int32_t lo[3], hi[3];  // virtual voxels [lo, hi), the expanded box
   // count triangles: refs[begin, begin + count), or with leaf blocks the
-  // kd_leaf_blocks(count) blocks from blocks[begin].
+  // irgrid_blocks(count) blocks after the record.
   uint32_t begin = 0, count = 0;
 };
 static_assert(sizeof(IrgridCell) == 32);
 
-// The unit of `slabs`: a cell record or a fifth of a 4-wide block.
-struct alignas(32) IrgridChunk {
-  std::byte bytes[32];
+// The cells' SIMD triangle blocks: 8 triangles per block (cells hold 25-36
+// triangles on average with the default densities, so 8 lanes are mostly
+// full; measured in docs/fair-fight.md, section 4c).
+inline constexpr int kIrgridBlockWidth = 8;
+using IrgridTriangleBlock = TriangleBlock<kIrgridBlockWidth>;
+inline uint32_t irgrid_blocks(uint32_t count) { return (count + kIrgridBlockWidth - 1) / kIrgridBlockWidth; }
+
+// The unit of `slabs`, as large as a block's alignment: a cell record (padded)
+// or a part of a block.
+struct alignas(IrgridTriangleBlock) IrgridChunk {
+  std::byte bytes[alignof(IrgridTriangleBlock)];
 };
-inline constexpr uint32_t kIrgridChunksPerBlock = sizeof(KdTriangleBlock) / sizeof(IrgridChunk);
-static_assert(sizeof(KdTriangleBlock) % sizeof(IrgridChunk) == 0 && alignof(KdTriangleBlock) <= alignof(IrgridChunk));
-static_assert(sizeof(IrgridCell) == sizeof(IrgridChunk));
+inline constexpr uint32_t kIrgridChunksPerBlock = sizeof(IrgridTriangleBlock) / sizeof(IrgridChunk);
+static_assert(sizeof(IrgridTriangleBlock) % sizeof(IrgridChunk) == 0);
+static_assert(sizeof(IrgridCell) <= sizeof(IrgridChunk));
 
 inline constexpr uint32_t kIrgridInnerNode = 0x80000000u;
 inline constexpr int kIrgridLevelsShift = 29;  // bits 29-30 of an inner entry: k
@@ -81,10 +89,10 @@ struct Irgrid {
   const IrgridCell& slab_cell(uint32_t at) const {
     return *std::launder(reinterpret_cast<const IrgridCell*>(slabs.data() + at));
   }
-  const KdTriangleBlock* slab_blocks(uint32_t at) const {
-    return std::launder(reinterpret_cast<const KdTriangleBlock*>(slabs.data() + at + 1));
+  const IrgridTriangleBlock* slab_blocks(uint32_t at) const {
+    return std::launder(reinterpret_cast<const IrgridTriangleBlock*>(slabs.data() + at + 1));
   }
-  static uint32_t slab_chunks(uint32_t count) { return 1 + kd_leaf_blocks(count) * kIrgridChunksPerBlock; }
+  static uint32_t slab_chunks(uint32_t count) { return 1 + irgrid_blocks(count) * kIrgridChunksPerBlock; }
 
   // Every cell in order (either layout).
   template <typename F>

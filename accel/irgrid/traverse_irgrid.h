@@ -44,7 +44,7 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD leaves run the watertight test");
   // kFarFirst: walk_grid hands the walk the reversed line (any hit from the
   // far end); the expanded boxes' faces serve either direction.
-  return walk_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
+  return walk_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst, kIrgridBlockWidth>(g.virt, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
                                                                                     double t1, auto& q) {
     int32_t v[3];
     for (int a = 0; a < 3; ++a) v[a] = g.virt.coord(a, dr.org[a] + t0 * dr.dir[a]);
@@ -107,19 +107,20 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
         if (!last) {
           next = g.cell_at(v, cache);
           if constexpr (kBlocks) {
-            // The record and the first block: 192 bytes from a 32-byte boundary.
+            // The record and the first block's vertices (the record is
+            // 64 bytes: a line each).
             const char* p = reinterpret_cast<const char*>(g.slabs.data() + next);
             __builtin_prefetch(p);
             __builtin_prefetch(p + 64);
             __builtin_prefetch(p + 128);
-            __builtin_prefetch(p + 191);
+            __builtin_prefetch(p + 192);
           } else {
             __builtin_prefetch(cells + next);
           }
         }
       }
       if constexpr (kBlocks) {
-        if (c.count != 0 && intersect_block_leaf<kKdBlockWidth>(g.slab_blocks(cur), kd_leaf_blocks(c.count), q.block_ray,
+        if (c.count != 0 && intersect_block_leaf<kIrgridBlockWidth>(g.slab_blocks(cur), irgrid_blocks(c.count), q.block_ray,
                                                                  q.ray.tmin, q.rec)) {
           if constexpr (kAnyHit) return;  // found one
         }
