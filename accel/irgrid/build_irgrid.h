@@ -8,9 +8,9 @@
 namespace raylab {
 
 struct IrgridOptions {
-  double top_density = 0.125;  // lambda_1: top cells ~ top_density * triangles
-  double sub_density = 0.125;  // lambda_2: a node with n triangles may split when sub_density * n > 8
-  double step_cost = 2.0;      // cost of entering a cell, in triangle tests (octree splits, merges)
+  double top_density = 0.25;   // lambda_1: top cells ~ top_density * triangles
+  double sub_density = 0.1;    // lambda_2: a node with n triangles may split when sub_density * n > 8
+  double step_cost = 1.0;      // cost of entering a cell, in triangle tests (octree splits, merges)
   int max_depth = 12;          // deepest octree level of a top cell
   bool merge = true;
   bool expand = true;

@@ -74,10 +74,10 @@ AcceleratorInfo irgrid_accelerator_info() {
       "irgrid",
       "irregular grid (Perard-Gayot, Kalojanov & Slusallek 2017): top grid, octree-subdivided cells merged by "
       "expected cost and expanded over neighbours they contain, walked cell to cell through a voxel map",
-      {{"top", "0.125", "top grid density lambda_1 (top cells ~ top x triangles), in (0, 64]", real_in(0, 64, Ends::OpenLow)},
-       {"sub", "0.125", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]",
+      {{"top", "0.25", "top grid density lambda_1 (top cells ~ top x triangles), in (0, 64]", real_in(0, 64, Ends::OpenLow)},
+       {"sub", "0.1", "octree density lambda_2: a node with n triangles may split when sub x n > 8, in (0, 1024]",
         real_in(0, 1024, Ends::OpenLow)},
-       {"step", "2",
+       {"step", "1",
         "cost of entering a cell in triangle tests, for the octree's split and the merge pass's cost model, in [0, 1000]",
         real_in(0, 1000)},
        {"depth", "12", "deepest octree level below a top cell, 0..16", integer_in(0, 16)},
