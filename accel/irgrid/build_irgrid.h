@@ -14,7 +14,7 @@ struct IrgridOptions {
   int max_depth = 12;          // deepest octree level of a top cell
   bool merge = true;
   bool expand = true;
-  bool leaf_blocks = false;  // cells' triangles as 4-wide SIMD blocks (irgrid.h; watertight test only)
+  bool leaf_blocks = false;  // cells' triangles as 8-wide SIMD blocks (irgrid.h; watertight test only)
 };
 
 // Builds the grid over `mesh`; fills `stats` (cells, references, passes).

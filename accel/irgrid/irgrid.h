@@ -17,8 +17,8 @@
 //
 // A cell's triangles are either ids into `refs` (scalar test, either
 // triangle test) or, with leaf blocks (simd=1, tri=watertight), the k-d
-// tree's 4-wide SIMD triangle blocks, stored with the cell: `slabs` holds
-// per cell its 32-byte record followed by its blocks, and the voxel map's
+// tree's SIMD triangle blocks (8 wide here), stored with the cell: `slabs`
+// holds per cell its record (32 bytes, padded to a chunk) followed by its blocks, and the voxel map's
 // leaf entries name the record's position there. The walk then goes voxel
 // map -> cell record and blocks in consecutive cache lines (one stream the
 // walk can prefetch as soon as it knows the next cell), instead of map ->
@@ -78,7 +78,7 @@ struct Irgrid {
   std::vector<IrgridCell> cells;    // empty with leaf blocks
   std::vector<uint32_t> refs;       // empty with leaf blocks
   std::vector<LeafTriangle> tris;   // empty with leaf blocks
-  // With leaf blocks: per cell its record, then kd_leaf_blocks(count) blocks;
+  // With leaf blocks: per cell its record, then irgrid_blocks(count) blocks;
   // the voxel map's leaf entries are record positions (in chunks).
   HugePageVector<IrgridChunk> slabs;
   bool leaf_blocks = false;

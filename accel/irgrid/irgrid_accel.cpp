@@ -84,7 +84,7 @@ AcceleratorInfo irgrid_accelerator_info() {
        {"merge", "1", "merge pass: neighbours merged when the merged cell's expected cost is not larger (0/1)",
         boolean_flag()},
        {"expand", "1", "expand pass: each cell's box grown over neighbours it contains (0/1)", boolean_flag()},
-       simd_param("cells' triangles as 4-wide SIMD blocks (tri=watertight)"), any_hit_order_param()},
+       simd_param("cells' triangles as 8-wide SIMD blocks (tri=watertight)"), any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
         IrgridOptions opt;
         opt.top_density = p.real("top");

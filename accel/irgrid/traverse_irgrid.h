@@ -26,7 +26,7 @@
 // triangle met again in a later cell is tested again, which cannot change
 // the recorder's hit (the same t and id; ties go to the lower id). With leaf
 // blocks (kBlocks, irgrid.h) `cur` is a cell's slab position and its
-// triangles are tested 4 at a time by the SIMD watertight test; simd=0 runs
+// triangles are tested 8 at a time by the SIMD watertight test; simd=0 runs
 // the same walk with the scalar test, so both give the same hits and count
 // the same work (a mailbox cannot skip single lanes of a block).
 #include <cmath>
