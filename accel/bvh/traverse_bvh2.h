@@ -98,16 +98,28 @@ template <TriangleTest kTest, typename Node, typename Recorder, typename Enters>
   }
 }
 
-template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
+// The entry of every binary BVH walk (box or sphere bounds): the recorder,
+// the validity check, the node test's per-ray form (NodeRay, made once the
+// ray is known to be valid), then the walk; enters(node_ray, node, tmin,
+// bound, t) is the node test.
+template <TriangleTest kTest, bool kAnyHit, bool kCount, typename NodeRay, typename View, typename Enters>
+[[gnu::always_inline]] inline Hit trace_binary_bvh(const View& bvh, const Ray& ray, TraversalStats* stats,
+                                                   Enters&& enters) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
-  // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
-  const SlabRay sr(ray);
+  const NodeRay node_ray(ray);
   return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
-                                [&](const Bvh2Node& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
-                                  return slab_test(sr, n.lo, n.hi, tmin, bound, t);
+                                [&](const auto& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
+                                  return enters(node_ray, n, tmin, bound, t);
                                 });
+}
+
+template <TriangleTest kTest, bool kAnyHit, bool kCount>
+inline Hit traverse_bvh2(const Bvh2View& bvh, const Ray& ray, TraversalStats* stats) {
+  // SlabRay has exact reciprocals (+-inf for zero components, see slab_test.h).
+  return trace_binary_bvh<kTest, kAnyHit, kCount, SlabRay>(
+      bvh, ray, stats, [](const SlabRay& sr, const Bvh2Node& n, float tmin, float bound, float& t)
+                           __attribute__((always_inline)) { return slab_test(sr, n.lo, n.hi, tmin, bound, t); });
 }
 
 // The walk under the name the generic shells call (accel/core/view_accelerator.h).

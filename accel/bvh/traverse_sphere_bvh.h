@@ -105,13 +105,9 @@ struct SphereRay {
 
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
 inline Hit traverse_sphere_bvh(const SphereBvhView& bvh, const Ray& ray, TraversalStats* stats) {
-  HitRecorder<kAnyHit, kCount> rec(ray, stats);
-  if (bvh.empty || !ray_is_valid(ray)) return rec.hit();
-  const SphereRay sray(ray);
-  return walk_binary_bvh<kTest>(bvh.nodes, bvh.tris, ray, rec,
-                                [&](const SphereNode& n, float tmin, float bound, float& t) __attribute__((always_inline)) {
-                                  return ray_sphere_test(sray, n, tmin, bound, t);
-                                });
+  return trace_binary_bvh<kTest, kAnyHit, kCount, SphereRay>(
+      bvh, ray, stats, [](const SphereRay& sray, const SphereNode& n, float tmin, float bound, float& t)
+                           __attribute__((always_inline)) { return ray_sphere_test(sray, n, tmin, bound, t); });
 }
 
 // The walk under the name the generic shells call (accel/core/view_accelerator.h).
