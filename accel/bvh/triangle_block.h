@@ -36,6 +36,12 @@ struct alignas(W >= 8 ? 64 : 32) TriangleBlock {
   }
 };
 
+// Blocks of width W that hold `count` triangles (the last one padded).
+template <int W>
+constexpr uint32_t triangle_blocks(uint32_t count) {
+  return (count + W - 1) / W;
+}
+
 // Per-ray constants of the block test: the same values as WatertightRay
 // (axis permutation, shear constants), broadcast to W lanes.
 template <int W>

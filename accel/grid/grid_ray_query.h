@@ -25,8 +25,9 @@
 
 namespace raylab {
 
-// kBlocks: the grid's cells hold 4-wide SIMD triangle blocks (cell_blocks.h,
-// simd=1 with the watertight test) instead of ids into triangle copies.
+// kBlocks: the grid's cells hold SIMD triangle blocks of kBlockWidth lanes
+// (cell_blocks.h: the k-d tree's 4; the irregular grid's slabs: 8; simd=1
+// with the watertight test) instead of ids into triangle copies.
 template <TriangleTest kTest, typename Recorder, bool kBlocks = false, int kBlockWidth = kKdBlockWidth>
 struct GridRayQuery {
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD blocks run the watertight test");

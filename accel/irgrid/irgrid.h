@@ -16,13 +16,13 @@
 // may overlap their neighbours while the map still names each voxel's owner.
 //
 // A cell's triangles are either ids into `refs` (scalar test, either
-// triangle test) or, with leaf blocks (simd=1, tri=watertight), the k-d
-// tree's SIMD triangle blocks (8 wide here), stored with the cell: `slabs`
-// holds per cell its record (32 bytes, padded to a chunk) followed by its blocks, and the voxel map's
-// leaf entries name the record's position there. The walk then goes voxel
-// map -> cell record and blocks in consecutive cache lines (one stream the
-// walk can prefetch as soon as it knows the next cell), instead of map ->
-// cell -> id -> triangle; the block test gives the scalar test's hits bit
+// triangle test) or, with leaf blocks (simd=1, tri=watertight), the BVH's
+// SIMD triangle blocks (8 wide here), stored with the cell: `slabs` holds
+// per cell its record (32 bytes, padded to a chunk) followed by its blocks,
+// and the voxel map's leaf entries name the record's position there. The
+// walk then goes voxel map -> cell record and blocks in consecutive cache
+// lines (one stream the walk can prefetch as soon as it knows the next
+// cell), instead of map -> cell -> id -> triangle; the block test gives the scalar test's hits bit
 // for bit (triangle_block.h).
 #include <cstddef>
 #include <cstdint>
@@ -30,9 +30,9 @@
 #include <vector>
 
 #include "accel/bvh/huge_page_allocator.h"
+#include "accel/bvh/triangle_block.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/grid/dda_grid.h"
-#include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {
 
@@ -50,7 +50,7 @@ static_assert(sizeof(IrgridCell) == 32);
 // full; measured in docs/fair-fight.md, section 4c).
 inline constexpr int kIrgridBlockWidth = 8;
 using IrgridTriangleBlock = TriangleBlock<kIrgridBlockWidth>;
-inline uint32_t irgrid_blocks(uint32_t count) { return (count + kIrgridBlockWidth - 1) / kIrgridBlockWidth; }
+inline uint32_t irgrid_blocks(uint32_t count) { return triangle_blocks<kIrgridBlockWidth>(count); }
 
 // The unit of `slabs`, as large as a block's alignment: a cell record (padded)
 // or a part of a block.

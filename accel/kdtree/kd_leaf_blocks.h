@@ -24,7 +24,7 @@ namespace raylab {
 inline constexpr int kKdBlockWidth = 4;
 using KdTriangleBlock = TriangleBlock<kKdBlockWidth>;
 
-inline uint32_t kd_leaf_blocks(uint32_t count) { return (count + kKdBlockWidth - 1) / kKdBlockWidth; }
+inline uint32_t kd_leaf_blocks(uint32_t count) { return triangle_blocks<kKdBlockWidth>(count); }
 
 // Writes the kd_leaf_blocks(count) blocks of one leaf (its `count`
 // triangle ids) to out[0..); shared with the grids' cells (accel/grid).
