@@ -26,7 +26,7 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 const char* const kKdSpecs[] = {"kdtree", "kdtree:clip=0", "kdtree:builder=median", "kdtree:layout=cluster",
-                                "kdtree:anyhit=front"};
+                                "kdtree:anyhit=front", "kdtree:anyhit=back"};
 
 // ---------------------------------------------------------------- helpers
 
@@ -380,11 +380,52 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
   }
 }
 
+// Every structure that declares the anyhit order (trees and grids), from the
+// registry, and the implicit grid storage.
+std::vector<std::string> any_hit_order_bases() {
+  std::vector<std::string> bases;
+  for (const auto& info : accelerator_registry()) {
+    for (const auto& p : info.params)
+      if (p.name == "anyhit") bases.push_back(info.name);
+  }
+  for (const char* expected : {"kdtree", "bsp", "octree", "grid", "hashgrid", "grid2", "irgrid"})
+    EXPECT_NE(std::find(bases.begin(), bases.end(), expected), bases.end()) << expected;
+  bases.push_back("grid:storage=implicit");
+  return bases;
+}
+
+// Node steps of one occlusion batch of `base` in each order (back, front,
+// auto), checking the answers against `ref`; auto also reports every ray once.
+struct OrderSteps {
+  uint64_t back = 0, front = 0, automatic = 0;
+};
+OrderSteps any_hit_steps(const std::string& base, const TriangleMesh& mesh, std::span<const Ray> rays,
+                         const std::vector<uint8_t>& ref, const Reference* closest) {
+  OrderSteps steps;
+  for (const char* order : {"back", "front", "auto"}) {
+    const std::string spec = base + (base.find(':') == std::string::npos ? ":" : ",") + "anyhit=" + order;
+    const Built b = build(spec, mesh);
+    std::vector<uint8_t> occ(rays.size());
+    TraversalStats st;
+    b.accel->occluded(rays, occ, &st);
+    EXPECT_EQ(occ, ref) << spec;
+    EXPECT_EQ(st.rays, rays.size()) << spec;
+    (order[0] == 'b' ? steps.back : order[0] == 'f' ? steps.front : steps.automatic) = st.nodes_visited;
+    // Closest hits take the same walk in every order (the order applies to any hit only).
+    if (closest && order[0] == 'b') {
+      std::string first;
+      EXPECT_EQ(count_mismatches(*b.accel, *closest, rays, &first), 0u) << spec << ": " << first;
+    }
+  }
+  return steps;
+}
+
 // Shadow rays leaving a dense sphere towards a light above it, half of them
 // blocked by a quad near the light: the any-hit walk gives the same answers
-// in both orders (accel/core/any_hit_order.h), and back to front (the
-// default) reaches the quad before the sphere's cells around the origin.
-// Trees and grids alike (a grid walks the reversed line, grid/dda.h).
+// in every order (accel/core/any_hit_order.h), back to front reaches the quad
+// before the sphere's cells around the origin, and anyhit=auto finds that
+// out on its sample rays. Trees and grids alike (a grid walks the reversed
+// line, grid/dda.h).
 TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
   append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, -4), Vec3f(0, 5, 4));
@@ -405,34 +446,40 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   const size_t blocked = static_cast<size_t>(std::count(ref.begin(), ref.end(), 1));
   ASSERT_GT(blocked, rays.size() / 4);
   ASSERT_LT(blocked, rays.size() * 3 / 4);
-  // Every structure that declares the anyhit order (trees and grids), from the registry.
-  std::vector<std::string> bases;
-  for (const auto& info : accelerator_registry()) {
-    for (const auto& p : info.params)
-      if (p.name == "anyhit") bases.push_back(info.name);
-  }
-  for (const char* expected : {"kdtree", "bsp", "octree", "grid", "hashgrid", "grid2", "irgrid"})
-    EXPECT_NE(std::find(bases.begin(), bases.end(), expected), bases.end()) << expected;
-  bases.push_back("grid:storage=implicit");
   const Reference closest = brute_force(mesh, rays);  // once: the slow part under the sanitizers
-  for (const std::string& base : bases) {
-    uint64_t steps[2] = {0, 0};
-    for (int order = 0; order < 2; ++order) {
-      const std::string spec = base + (base.find(':') == std::string::npos ? ":" : ",") +
-                               (order == 0 ? "anyhit=back" : "anyhit=front");
-      const Built b = build(spec, mesh);
-      std::vector<uint8_t> occ(rays.size());
-      TraversalStats st;
-      b.accel->occluded(rays, occ, &st);
-      EXPECT_EQ(occ, ref) << spec;
-      steps[order] = st.nodes_visited;
-      // Closest hits take the same walk in both orders (the order applies to any hit only).
-      if (order == 0) {
-        std::string first;
-        EXPECT_EQ(count_mismatches(*b.accel, closest, rays, &first), 0u) << spec << ": " << first;
-      }
-    }
-    EXPECT_LT(steps[0], steps[1]) << base << ": node steps back to front " << steps[0] << ", front to back " << steps[1];
+  for (const std::string& base : any_hit_order_bases()) {
+    const OrderSteps st = any_hit_steps(base, mesh, rays, ref, &closest);
+    EXPECT_LT(st.back, st.front) << base << ": node steps back to front " << st.back << ", front to back " << st.front;
+    // Auto walks back to front, plus its samples' walks in both orders.
+    EXPECT_LE(st.automatic, st.back + (st.back + st.front) / 100) << base << ": auto " << st.automatic;
+  }
+}
+
+// The opposite case: shadow rays leaving the sphere's lower half towards a
+// light high above enter the sphere at once, so front to back ends in the
+// first cell, while back to front first crosses the empty space under the
+// light; anyhit=auto picks front to back.
+TEST(KdTreeTraversal, AnyHitOrderAutoPicksFrontToBackWhenTheOccluderIsAtTheOrigin) {
+  const TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
+  Pcg32 rng(23, 23);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 3000; ++i) {
+    Vec3f n = test::random_direction(rng);
+    n.y() = -std::fabs(n.y()) - 0.2f;  // the lower half, facing away from the light
+    n.normalize();
+    const Vec3f origin = 1.001f * n;
+    const Vec3f light(8.0f * rng.uniform() - 4.0f, 12.0f, 8.0f * rng.uniform() - 4.0f);
+    rays.emplace_back(origin, light - origin, 0.0f, 1.0f);
+  }
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  std::vector<uint8_t> ref(rays.size());
+  brute->occluded(rays, ref);
+  ASSERT_GT(static_cast<size_t>(std::count(ref.begin(), ref.end(), 1)), rays.size() * 95 / 100);  // a few graze past
+  for (const std::string& base : any_hit_order_bases()) {
+    const OrderSteps st = any_hit_steps(base, mesh, rays, ref, nullptr);
+    EXPECT_LT(st.front, st.back) << base << ": node steps front to back " << st.front << ", back to front " << st.back;
+    EXPECT_LE(st.automatic, st.front + (st.back + st.front) / 100) << base << ": auto " << st.automatic;
   }
 }
 

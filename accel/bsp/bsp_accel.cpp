@@ -21,8 +21,15 @@ namespace {
 
 class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView> {
  public:
-  BspAccel(const BspBuildOptions& opt, TriangleTest test, bool any_hit_far_first, bool simd)
-      : ViewAccelerator(opt, test), any_hit_far_first_(any_hit_far_first), simd_(simd) {}
+  BspAccel(const BspBuildOptions& opt, TriangleTest test, AnyHitOrder any_hit_order, bool simd)
+      : ViewAccelerator(opt, test), any_hit_order_(any_hit_order), simd_(simd) {}
+
+  // The shell's kernel, with the any-hit order per call (accel/core/batch_accelerator.h).
+  AnyHitOrder any_hit_order() const { return any_hit_order_; }
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
+  Hit trace(const Ray& ray, TraversalStats* stats, bool far_first = false) const {
+    return traverse_view<kTest, kAnyHit, kCount>(view_, ray, stats, far_first);
+  }
 
   // Depth 0: the scene box; an inner node at depth k draws its split plane
   // clipped to the node's region (the cap face its split creates) as
@@ -60,7 +67,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
       ids_ = std::move(leaf_tris.ids);
     }
     view_ = BspView{nodes_.data(), planes_.data(), tris_.data(), ids_.data(), tree.bounds, mesh.num_triangles() == 0,
-                    &directions_, blocks_.empty() ? nullptr : blocks_.data(), any_hit_far_first_};
+                    &directions_, blocks_.empty() ? nullptr : blocks_.data()};
 
     const TreeShape shape{.nodes = nodes_.size(),
                           .inner = nodes_.size() - bs.leaves,
@@ -114,7 +121,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
            outline_node(node.child() + 1, above, depth + 1, max_depth, out);
   }
 
-  bool any_hit_far_first_;  // anyhit=back
+  AnyHitOrder any_hit_order_;  // accel/core/any_hit_order.h
   bool simd_;               // simd=1: leaves as the k-d tree's SIMD blocks
   BspDirectionTable directions_;
   HugePageVector<BspPackedNode> nodes_;  // huge pages, as the k-d tree's
@@ -155,7 +162,7 @@ AcceleratorInfo bsp_accelerator_info() {
         o.traversal_cost = costs.traversal;
         o.intersection_cost = costs.intersection;
         o.max_depth = parse_depth_limit(p);
-        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_far_first(p), parse_simd(p));
+        return std::make_unique<BspAccel>(o, parse_triangle_test(p), parse_any_hit_order(p), parse_simd(p));
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time

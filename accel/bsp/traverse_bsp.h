@@ -64,8 +64,6 @@ struct BspView {
   const BspDirectionTable* directions = nullptr;
   // SIMD leaves (watertight test): a leaf's first() is then its first block.
   const KdTriangleBlock* blocks = nullptr;
-  // Any-hit walks visit cells back to front (accel/core/any_hit_order.h).
-  bool any_hit_far_first = false;
 };
 
 // Per-ray constants of every fixed direction a node may name.
@@ -184,11 +182,12 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
   }
 }
 
-// The walk under the name the generic shell calls (accel/core/view_accelerator.h).
+// The walk under the name the generic shell calls (accel/core/view_accelerator.h);
+// far_first: an any-hit walk visits the cells back to front (accel/core/any_hit_order.h).
 template <TriangleTest kTest, bool kAnyHit, bool kCount>
-inline Hit traverse_view(const BspView& v, const Ray& ray, TraversalStats* stats) {
+inline Hit traverse_view(const BspView& v, const Ray& ray, TraversalStats* stats, bool far_first = false) {
   return walk_with_leaf_blocks<kTest>(v, [&]<bool kBlocks>() {
-    return walk_in_any_hit_order<kAnyHit>(v.any_hit_far_first, [&]<bool kFarFirst>() {
+    return walk_in_any_hit_order<kAnyHit>(far_first, [&]<bool kFarFirst>() {
       return traverse_bsp<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(v, ray, stats);
     });
   });

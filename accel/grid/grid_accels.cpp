@@ -21,9 +21,10 @@ class GridAccel final : public BatchAccelerator<GridAccel<Grid, kBuild>> {
  public:
   explicit GridAccel(const GridOptions& opt) : BatchAccelerator<GridAccel<Grid, kBuild>>(opt.test), opt_(opt) {}
 
+  AnyHitOrder any_hit_order() const { return opt_.any_hit_order; }
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return walk_in_any_hit_order<kAnyHit>(opt_.any_hit_far_first, [&]<bool kFarFirst>() {
+  Hit trace(const Ray& ray, TraversalStats* stats, bool far_first = false) const {
+    return walk_in_any_hit_order<kAnyHit>(far_first, [&]<bool kFarFirst>() {
       return traverse_grid<kTest, kAnyHit, kCount, kFarFirst>(view_, ray, stats);
     });
   }

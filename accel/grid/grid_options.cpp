@@ -49,7 +49,7 @@ GridOptions parse_grid_options(const Params& p, bool with_res, bool with_top) {
   o.assign = p.str("assign") == "bbox" ? AssignMode::Bbox : AssignMode::Exact;
   o.test = parse_triangle_test(p);
   o.simd = parse_simd(p);
-  o.any_hit_far_first = parse_any_hit_far_first(p);
+  o.any_hit_order = parse_any_hit_order(p);
   return o;
 }
 
@@ -64,7 +64,8 @@ void complete_grid_info(AcceleratorInfo& info) {
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
-  info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox", info.name + ":simd=0", info.name + ":anyhit=front"};
+  info.cover = {info.name + ":tri=mt", info.name + ":assign=bbox", info.name + ":simd=0", info.name + ":anyhit=front",
+                info.name + ":anyhit=back"};
   info.stats = {{"cells", two_level ? "sub-grid cells" : "cells"},
                 {"nonempty_cells", "cells holding at least one triangle"},
                 {"empty_fraction", "fraction of empty cells"},

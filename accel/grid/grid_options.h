@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "accel/core/any_hit_order.h"
 #include "accel/core/intersect_triangle.h"
 #include "accel/grid/cell_overlap.h"
 #include "accel/grid/grid_resolution.h"
@@ -36,7 +37,7 @@ struct GridOptions {
   // its triangles (Kalojanov, Billeter & Slusallek 2011); else sub=fit.
   bool whole_cell_subgrids = false;
   // Any-hit walks start at the segment's far end (accel/core/any_hit_order.h).
-  bool any_hit_far_first = true;
+  AnyHitOrder any_hit_order = AnyHitOrder::Back;
 
   // Cells stored as SIMD triangle blocks (cell_blocks.h).
   bool leaf_blocks() const { return simd && test == TriangleTest::Watertight; }

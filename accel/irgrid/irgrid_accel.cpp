@@ -18,14 +18,15 @@ namespace {
 
 class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
  public:
-  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd, bool any_hit_far_first)
-      : BatchAccelerator(test), opt_(opt), any_hit_far_first_(any_hit_far_first) {
+  IrgridAccel(IrgridOptions opt, TriangleTest test, bool simd, AnyHitOrder any_hit_order)
+      : BatchAccelerator(test), opt_(opt), any_hit_order_(any_hit_order) {
     opt_.leaf_blocks = leaf_blocks_wanted(simd, test);
   }
 
+  AnyHitOrder any_hit_order() const { return any_hit_order_; }
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return walk_in_any_hit_order<kAnyHit>(any_hit_far_first_, [&]<bool kFarFirst>() {
+  Hit trace(const Ray& ray, TraversalStats* stats, bool far_first = false) const {
+    return walk_in_any_hit_order<kAnyHit>(far_first, [&]<bool kFarFirst>() {
       if constexpr (kTest == TriangleTest::Watertight) {
         if (grid_.leaf_blocks) return traverse_irgrid<kTest, kAnyHit, kCount, true, kFarFirst>(grid_, ray, stats);
       }
@@ -63,7 +64,7 @@ class IrgridAccel final : public BatchAccelerator<IrgridAccel> {
   }
 
   IrgridOptions opt_;
-  bool any_hit_far_first_ = true;
+  AnyHitOrder any_hit_order_ = AnyHitOrder::Back;
   Irgrid grid_;
 };
 
@@ -93,9 +94,9 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.max_depth = p.integer("depth");
         opt.merge = p.boolean("merge");
         opt.expand = p.boolean("expand");
-        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p), parse_any_hit_far_first(p));
+        return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p), parse_any_hit_order(p));
       });
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0", "irgrid:anyhit=front"};  // both off: tests/test_irgrid.cpp
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0", "irgrid:anyhit=front", "irgrid:anyhit=back"};  // both off: tests/test_irgrid.cpp
   info.caps.scalar_variant = "simd=0";
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},

@@ -26,18 +26,19 @@ enum class KdBuilder { Sah, Median };
 class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
  public:
   KdTreeAccel(KdBuilder builder, const KdBuildOptions& opt, TriangleTest test, bool simd, bool cluster,
-              bool any_hit_far_first)
+              AnyHitOrder any_hit_order)
       : BatchAccelerator(test),
         builder_(builder),
         opt_(opt),
         cluster_(cluster),
-        any_hit_far_first_(any_hit_far_first),
+        any_hit_order_(any_hit_order),
         blocks_wanted_(leaf_blocks_wanted(simd, test)) {}
 
+  AnyHitOrder any_hit_order() const { return any_hit_order_; }
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
+  Hit trace(const Ray& ray, TraversalStats* stats, bool far_first = false) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
-      return walk_in_any_hit_order<kAnyHit>(any_hit_far_first_, [&]<bool kFarFirst>() {
+      return walk_in_any_hit_order<kAnyHit>(far_first, [&]<bool kFarFirst>() {
         return traverse_kdtree<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(view_, ray, stats);
       });
     });
@@ -80,7 +81,7 @@ class KdTreeAccel final : public BatchAccelerator<KdTreeAccel> {
   KdBuilder builder_;
   KdBuildOptions opt_;
   bool cluster_;  // layout=cluster (kd_cache_layout.h)
-  bool any_hit_far_first_;  // anyhit=back (accel/core/any_hit_order.h)
+  AnyHitOrder any_hit_order_;  // accel/core/any_hit_order.h
   // Nodes and leaf blocks on transparent huge pages (huge_page_allocator.h):
   // a ray's ~50 node loads land all over a 5-25 MB tree, and with 4 KiB
   // pages most of them would also miss the TLB.
@@ -138,13 +139,13 @@ AcceleratorInfo kdtree_accelerator_info() {
         opt.max_depth = parse_depth_limit(p);
         opt.median_leaf_size = p.integer("leaf");
         return std::make_unique<KdTreeAccel>(builder, opt, parse_triangle_test(p), parse_simd(p),
-                                             p.str("layout") == "cluster", parse_any_hit_far_first(p));
+                                             p.str("layout") == "cluster", parse_any_hit_order(p));
       }};
   info.caps.mt_variant = "tri=mt";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
   info.cover = {"kdtree:builder=median", "kdtree:clip=0", "kdtree:tri=mt", "kdtree:simd=0", "kdtree:layout=cluster",
-                "kdtree:anyhit=front"};
+                "kdtree:anyhit=front", "kdtree:anyhit=back"};
   info.stats = tree_stat_infos("triangle references in leaves",
                                "references per triangle (perfect splits duplicate straddling triangles)",
                                {{"avg_leaf_size", "mean references per non-empty leaf"},

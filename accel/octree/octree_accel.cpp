@@ -22,7 +22,7 @@ struct OctreeOptions {
   OctreeStorage storage = OctreeStorage::Pointer;
   double budget_mib = 2048.0;
   bool simd = true;  // node lists as SIMD triangle blocks (watertight test only)
-  bool any_hit_far_first = true;  // anyhit=back
+  AnyHitOrder any_hit_order = AnyHitOrder::Back;  // accel/core/any_hit_order.h
 };
 
 template <typename Layout>
@@ -31,10 +31,11 @@ class OctreeAccel final : public BatchAccelerator<OctreeAccel<Layout>> {
   OctreeAccel(const OctreeOptions& opt, TriangleTest test)
       : BatchAccelerator<OctreeAccel<Layout>>(test), opt_(opt), blocks_wanted_(leaf_blocks_wanted(opt.simd, test)) {}
 
+  AnyHitOrder any_hit_order() const { return opt_.any_hit_order; }
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
-  Hit trace(const Ray& ray, TraversalStats* stats) const {
+  Hit trace(const Ray& ray, TraversalStats* stats, bool far_first = false) const {
     return walk_with_leaf_blocks<kTest>(view_, [&]<bool kBlocks>() {
-      return walk_in_any_hit_order<kAnyHit>(opt_.any_hit_far_first, [&]<bool kFarFirst>() {
+      return walk_in_any_hit_order<kAnyHit>(far_first, [&]<bool kFarFirst>() {
         return traverse_octree<kTest, kAnyHit, kCount, kBlocks, Layout, kFarFirst>(view_, ray, stats);
       });
     });
@@ -166,7 +167,7 @@ AcceleratorInfo octree_accelerator_info() {
         opt.budget_mib = p.real("budget");
         if (p.given("budget") && storage != "linear") throw SpecError("octree: budget applies to storage=linear only");
         opt.simd = parse_simd(p);
-        opt.any_hit_far_first = parse_any_hit_far_first(p);
+        opt.any_hit_order = parse_any_hit_order(p);
         const TriangleTest test = parse_triangle_test(p);
         if (storage == "linear") return std::make_unique<OctreeAccel<OctLinearLayout>>(opt, test);
         if (storage == "hash") return std::make_unique<OctreeAccel<OctHashLayout>>(opt, test);
@@ -174,7 +175,7 @@ AcceleratorInfo octree_accelerator_info() {
       });
   info.caps.scalar_variant = "simd=0";
   info.cover = {"octree:assign=straddle", "octree:storage=linear", "octree:storage=hash", "octree:simd=0",
-                "octree:term=count", "octree:anyhit=front"};
+                "octree:term=count", "octree:anyhit=front", "octree:anyhit=back"};
   info.stats = tree_stat_infos(
       "triangle references in all nodes", "references per triangle (exact assignment duplicates straddling triangles)",
       {{"inner_references", "references held by inner nodes (assign=straddle)"},
