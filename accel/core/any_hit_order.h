@@ -21,10 +21,11 @@
 // Neither order wins everywhere: on the bunny (a point light above one
 // object that shadows itself) the irregular grid's shadow rays run 1.45x
 // faster front to back, on the atrium views 1.6-3x slower. `anyhit=auto`
-// measures instead of guessing: each batch of occlusion rays traces a few
-// sample rays both ways with the work counted, and the rest of the batch in
-// the cheaper order (accel/core/batch_accelerator.h). The answers are the
-// same in every order; only the work differs.
+// measures instead of guessing: every eighth batch of occlusion rays traces
+// a few sample rays both ways with the work counted, and the batches walk in
+// the order the samples found cheaper (accel/core/batch_accelerator.h,
+// docs/fair-fight.md section 4d). The answers are the same in every order;
+// only the work differs.
 #include <cstddef>
 #include <cstdint>
 
