@@ -75,8 +75,8 @@ class BatchAccelerator : public Base {
   // The order the structure was made with, or for anyhit=auto the order the
   // samples favour. Every kAutoSamplePeriod-th batch (the first included),
   // kAutoSamples rays spread over it are traced both ways with their work
-  // counted, and the score (a running mean of the cost difference, relative
-  // to the two costs) is updated; batches use the order the score favours.
+  // counted, and the score (half the old score plus the new cost difference
+  // relative to the two costs) is updated; batches use the order it favours.
   // Sampling every batch cost 10 % on the atrium views, where back to front
   // is right: bench hands the kernel 256 rays at a time, and switching
   // between three large walk routines per batch costs more than the counted
