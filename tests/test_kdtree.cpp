@@ -420,6 +420,30 @@ OrderSteps any_hit_steps(const std::string& base, const TriangleMesh& mesh, std:
   return steps;
 }
 
+// Shadow rays from just outside a radius-1 sphere (surface normal n =
+// to_normal(random direction)) to a light point in the square [-spread,
+// spread]^2 at height `height`, and brute force's occlusion answers for them.
+struct ShadowRays {
+  std::vector<Ray> rays;
+  std::vector<uint8_t> occluded;
+};
+template <typename ToNormal>
+ShadowRays sphere_shadow_rays(const TriangleMesh& mesh, uint64_t seed, ToNormal&& to_normal, float spread, float height) {
+  Pcg32 rng(seed, seed);
+  ShadowRays s;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3f n = to_normal(test::random_direction(rng));
+    const Vec3f origin = 1.001f * n;  // just outside the surface (the sphere is tessellated inside radius 1)
+    const Vec3f light(2.0f * spread * rng.uniform() - spread, height, 2.0f * spread * rng.uniform() - spread);
+    s.rays.emplace_back(origin, light - origin, 0.0f, 1.0f);
+  }
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  s.occluded.resize(s.rays.size());
+  brute->occluded(s.rays, s.occluded);
+  return s;
+}
+
 // Shadow rays leaving a dense sphere towards a light above it, half of them
 // blocked by a quad near the light: the any-hit walk gives the same answers
 // in every order (accel/core/any_hit_order.h), back to front reaches the quad
@@ -430,19 +454,11 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
   TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
   append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, -4), Vec3f(0, 5, 4));
   append_triangle(mesh, Vec3f(-4, 5, -4), Vec3f(0, 5, 4), Vec3f(-4, 5, 4));
-  Pcg32 rng(17, 17);
-  std::vector<Ray> rays;
-  for (int i = 0; i < 3000; ++i) {
-    Vec3f n = test::random_direction(rng);
-    n.y() = std::fabs(n.y());  // the upper half, facing the light
-    const Vec3f origin = 1.001f * n;  // just outside the surface (the sphere is tessellated inside radius 1)
-    const Vec3f light(4.0f * rng.uniform() - 2.0f, 10.0f, 4.0f * rng.uniform() - 2.0f);
-    rays.emplace_back(origin, light - origin, 0.0f, 1.0f);
-  }
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  std::vector<uint8_t> ref(rays.size());
-  brute->occluded(rays, ref);
+  // The upper half, facing the light.
+  const ShadowRays shadow = sphere_shadow_rays(mesh, 17, [](Vec3f n) { return Vec3f(n.x(), std::fabs(n.y()), n.z()); },
+                                               2.0f, 10.0f);
+  const std::vector<Ray>& rays = shadow.rays;
+  const std::vector<uint8_t>& ref = shadow.occluded;
   const size_t blocked = static_cast<size_t>(std::count(ref.begin(), ref.end(), 1));
   ASSERT_GT(blocked, rays.size() / 4);
   ASSERT_LT(blocked, rays.size() * 3 / 4);
@@ -461,20 +477,11 @@ TEST(KdTreeTraversal, AnyHitOrderGivesTheSameAnswersAndStartsAtTheLight) {
 // light; anyhit=auto picks front to back.
 TEST(KdTreeTraversal, AnyHitOrderAutoPicksFrontToBackWhenTheOccluderIsAtTheOrigin) {
   const TriangleMesh mesh = make_uv_sphere(96, 48, Vec3f::Zero(), 1.0f);
-  Pcg32 rng(23, 23);
-  std::vector<Ray> rays;
-  for (int i = 0; i < 3000; ++i) {
-    Vec3f n = test::random_direction(rng);
-    n.y() = -std::fabs(n.y()) - 0.2f;  // the lower half, facing away from the light
-    n.normalize();
-    const Vec3f origin = 1.001f * n;
-    const Vec3f light(8.0f * rng.uniform() - 4.0f, 12.0f, 8.0f * rng.uniform() - 4.0f);
-    rays.emplace_back(origin, light - origin, 0.0f, 1.0f);
-  }
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  std::vector<uint8_t> ref(rays.size());
-  brute->occluded(rays, ref);
+  // The lower half, facing away from the light.
+  const ShadowRays shadow = sphere_shadow_rays(
+      mesh, 23, [](Vec3f n) { return Vec3f(n.x(), -std::fabs(n.y()) - 0.2f, n.z()).normalized(); }, 4.0f, 12.0f);
+  const std::vector<Ray>& rays = shadow.rays;
+  const std::vector<uint8_t>& ref = shadow.occluded;
   ASSERT_GT(static_cast<size_t>(std::count(ref.begin(), ref.end(), 1)), rays.size() * 95 / 100);  // a few graze past
   for (const std::string& base : any_hit_order_bases()) {
     const OrderSteps st = any_hit_steps(base, mesh, rays, ref, nullptr);
