@@ -51,7 +51,7 @@ struct BvhConfig {
   int leaf = 16;              // max references per leaf (auto: bvh2 4, wide 2 blocks)
   int block = 8;              // triangles per SIMD block
   int bins = 64;
-  int binary_leaf = 4;        // ranges this small become binary leaves without SAH test
+  int binary_leaf = 4;        // ranges this small become binary leaves without SAH test (auto: 1 with reinsert)
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
@@ -341,8 +341,9 @@ AcceleratorInfo bvh_accelerator_info() {
         integer_in(1, 255).or_word("auto")},
        {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)", integer_of({4, 8, 16})},
        {"bins", "64", "SAH bins per axis for nodes of 1024 references or more (fewer below: 8 under 128, 16 under 1024), 2..256", integer_in(2, 256)},
-       {"bleaf", "4", "binary tree: ranges of at most this many triangles become leaves before the collapse",
-        integer_in(1, 16)},
+       {"bleaf", "auto", "binary tree: ranges of at most this many triangles become leaves before the collapse "
+        "(auto: 1 with opt=reinsert, which moves leaves whole, else 4)",
+        integer_in(1, 16).or_word("auto")},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area",
         real_in(0, kUnbounded).as_float()},
        {"sbudget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count", real_in(0, 4).as_float()},
@@ -376,7 +377,11 @@ AcceleratorInfo bvh_accelerator_info() {
         const int max_leaf = c.layout == LayoutKind::Bvh2 ? 255 : static_cast<int>(wide_ref::kMaxBlocks) * c.block;
         if (c.leaf > max_leaf) throw SpecError(fmt::format("bvh: leaf must be in 1..{}", max_leaf));
         c.bins = p.integer("bins");
-        c.binary_leaf = p.integer("bleaf");
+        // Reinsertion moves leaves whole: single-triangle leaves let it move
+        // every triangle (+4 % over bleaf=4 on the interior views, all four
+        // ray sets; docs/bvh-speed.md, session 6). The collapse merges them
+        // into wide leaves afterwards either way.
+        c.binary_leaf = p.str("bleaf") == "auto" ? (c.reinsert ? 1 : 4) : p.integer("bleaf");
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("sbudget"));
         c.opt_rounds = p.integer("opt_rounds");
