@@ -11,6 +11,7 @@
 #include <cstring>
 #include <map>
 #include <numeric>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -608,6 +609,21 @@ TEST(BvhReinsertion, LowersSahCostAndRespectsTheTimeBudget) {
   const BuildStats bs = a->build(s.mesh);
   ASSERT_TRUE(bs.extra.count("sah_before_opt") && bs.extra.count("sah_after_opt"));
   EXPECT_LT(bs.extra.at("sah_after_opt"), bs.extra.at("sah_before_opt"));
+}
+
+// bleaf=auto: single-triangle binary leaves under reinsertion (which moves
+// leaves whole), 4 otherwise; the same trees as the explicit values.
+TEST(BvhReinsertion, AutoBinaryLeafIsOneUnderReinsertionAndFourOtherwise) {
+  const test::NamedMesh s = test::soup(3000, 5);
+  auto tree_of = [&](const char* spec) {
+    auto a = make_accelerator(spec);
+    const BuildStats st = a->build(s.mesh);
+    return std::make_tuple(st.nodes, st.leaves, st.extra.at("sah_tree"));
+  };
+  EXPECT_EQ(tree_of("bvh:opt=reinsert"), tree_of("bvh:opt=reinsert,bleaf=1"));
+  EXPECT_NE(tree_of("bvh:opt=reinsert"), tree_of("bvh:opt=reinsert,bleaf=4"));
+  EXPECT_EQ(tree_of("bvh"), tree_of("bvh:bleaf=4"));
+  EXPECT_NE(tree_of("bvh"), tree_of("bvh:bleaf=1"));
 }
 
 // ---------------------------------------------------------------------------
