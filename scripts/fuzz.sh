@@ -26,8 +26,9 @@ printf '\004{"asset":{"version":"2.0"},"meshes":[]}' > "$work/mesh/gltf"
 printf '\006v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\nresolution 8 8\np 3\n0 0 0\n1 0 0\n0 1 0\n' > "$work/mesh/nff"
 printf '\007{"meshes":[{"file":"input.obj"}],"camera":{"from":[0,0,5],"at":[0,0,0]}}' > "$work/mesh/json"
 # Ray seeds: a ray into the scene, an axis-parallel one with -0 components, a negative tmin,
-# and three rays this fuzzer found: a direction of 2^-148 (its reciprocal and margins overflow),
-# an origin 2^50 away (the grids' walk lost a cell to rounding), and hits beyond FLT_MAX.
+# and four rays this fuzzer found: a direction of 2^-148 (its reciprocal and margins overflow),
+# an origin 2^50 away (the grids' walk lost a cell to rounding), hits beyond FLT_MAX, and an
+# origin 2^104 away with |dir| = 0.003 (one rebase of the grids' walk still left it 2^51 out).
 /usr/bin/python3 - "$work/rays" <<'PY'
 import struct, sys
 rays = [(0.5, 0.5, -1, 0, 0, 1, 0, float('inf')), (0.5, 0.5, -1, -0.0, -0.0, 1, 1e-3, float('inf')),
@@ -36,7 +37,9 @@ rays = [(0.5, 0.5, -1, 0, 0, 1, 0, float('inf')), (0.5, 0.5, -1, -0.0, -0.0, 1, 
         (float.fromhex('0x1.6p-138'), 0.5, -float.fromhex('0x1.001002p+50'), 0, 0, float.fromhex('0x1.01bap+0'),
          float.fromhex('0x1.000004p-126'), float('inf')),
         (float.fromhex('0x1.b6p-1'), 0.5, -float.fromhex('0x1.001p+104'), 0, 0, float.fromhex('0x1.fcp-128'), 0,
-         float('inf'))]
+         float('inf')),
+        (float.fromhex('0x1.fad8p-136'), float.fromhex('0x1.007ep-111'), -float.fromhex('0x1.01e7p+104'), 0, 0,
+         float.fromhex('0x1.7fp-9'), 0, float('inf'))]
 open(sys.argv[1] + '/seed', 'wb').write(b''.join(struct.pack('<8f', *r) for r in rays))
 PY
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0}

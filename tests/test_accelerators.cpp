@@ -163,10 +163,12 @@ TEST_P(EveryAccelerator, RaysWithOverflowingReciprocalsReachBoxesBesideTheirPlan
     }
 }
 
-// Rays from far away (origins 2^10 to 2^50 from a unit-sized scene) aimed
+// Rays from far away (origins 2^10 to 2^112 from a unit-sized scene) aimed
 // at points inside it. Found by fuzz_rays: a ray from z = -2^50 along +z,
 // whose grid walk computed its cells with errors of a quarter unit and
-// stopped a cell short of the back wall (dda.h, dda_line).
+// stopped a cell short of the back wall (dda.h, dda_line); and one from
+// z = -2^104 with |dir| = 0.003, whose rebased walk still started 2^51
+// units out and lost the back wall in the two-level grid.
 //  - Along an axis (the other two components 0, the origin's other
 //    coordinates inside the box, some just inside a wall) the watertight
 //    test's shear is exact, so its hit or miss is the exact one and every
@@ -185,14 +187,14 @@ TEST_P(EveryAccelerator, RaysFromFarAwayAgreeWithBruteForce) {
   const Aabb box = mesh.bounds();
   Pcg32 rng(17, 5);
   std::vector<Ray> axis_rays, oblique_rays;
-  for (int e = 10; e <= 50; e += 4)
+  for (int e : {10, 14, 18, 22, 26, 30, 34, 38, 42, 46, 50, 64, 88, 104, 112})
     for (int i = 0; i < 40; ++i) {
       const Vec3f target = box.lo + Vec3f(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(box.diagonal());
       if (i % 2 == 0) {
         const int a = static_cast<int>(rng.next() % 3);
         Vec3f org = target, dir = Vec3f::Zero();
         org[a] = (i % 4 == 0 ? -1.0f : 1.0f) * std::ldexp(1.0f, e);
-        dir[a] = (i % 4 == 0 ? 1.0f : -1.0f) * (i % 8 < 4 ? 1.0f : 1.00675f);
+        dir[a] = (i % 4 == 0 ? 1.0f : -1.0f) * (i % 8 < 4 ? 1.0f : i % 16 < 8 ? 1.00675f : 0x1.7fp-9f);
         if (i % 6 == 0) org[(a + 1) % 3] = box.lo[(a + 1) % 3] + 0x1p-138f;  // the crash: just inside a wall
         axis_rays.emplace_back(org, dir);
       } else {

@@ -111,11 +111,18 @@ template <bool kFarFirst>
 // stopped one cell short of the back wall). So when the origin lies more
 // than kDdaRebaseFactor box extents outside the box, the walk starts from
 // the point of the line at the clipped entry parameter t_base, computed with
-// one rounding (fused multiply-add: a point of the line to within an ulp of
-// the box's coordinates), and its parameter is s = t - t_base; [tmin, tmax]
-// becomes [tmin - t_base, tmax - t_base], widened by a few ulps of t_base
-// (the entry parameter's own error). The triangle tests keep the ray, so the
+// one rounding (fused multiply-add: a point of the line, off it by an ulp of
+// its own coordinates), and its parameter is s = t - t_base; [tmin, tmax]
+// becomes [tmin - t_base, tmax - t_base], widened by 2^-48 of t_base (the
+// entry parameter's own error). The triangle tests keep the ray, so the
 // answers are the ray's; a walker compares hit distances with t_base + s.
+// The entry parameter itself carries D * 2^-53 / |dir| of rounding error, so
+// one rebase lands D * 2^-53 from the box along the line: 2^51 units for
+// D = 2^104 (found by fuzz_rays: a ray from z = -2^104 whose two-level grid
+// walk, at s ~ 2^58 with an ulp of 64, lost the back wall). The rebase is
+// therefore repeated from the new point while it is still that far out;
+// each round multiplies the distance by about 2^-53, so float origins
+// (D < 2^128) need at most three.
 // Nearer origins keep the plain line (t_base = 0): their errors are at most
 // 2^16 extents * 2^-53 = 2^-37 of the grid's extent, far below the cell margin.
 inline constexpr double kDdaRebaseFactor = 65536.0;
@@ -128,20 +135,29 @@ struct DdaLine {
 
 [[gnu::always_inline]] inline DdaLine dda_line(const Ray& r, const double lo[3], const double hi[3]) {
   DdaLine line{DdaRay(r), 0.0, r.tmin, r.tmax};
-  double outside = 0.0, extent = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    extent = std::max(extent, hi[a] - lo[a]);
-    outside = std::max(outside, std::max(lo[a] - line.ray.org[a], line.ray.org[a] - hi[a]));
-  }
-  if (!(outside > kDdaRebaseFactor * extent)) [[likely]]
+  double extent = 0.0;
+  for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
+  const auto far_out = [&] {
+    double outside = 0.0;
+    for (int a = 0; a < 3; ++a)
+      outside = std::max(outside, std::max(lo[a] - line.ray.org[a], line.ray.org[a] - hi[a]));
+    return outside > kDdaRebaseFactor * extent;
+  };
+  if (!far_out()) [[likely]]
     return line;
   double t0 = r.tmin, t1 = r.tmax;
   if (!dda_clip(line.ray, lo, hi, t0, t1)) return line;  // a miss either way
-  line.t_base = t0;
-  for (int a = 0; a < 3; ++a) line.ray.org[a] = std::fma(t0, line.ray.dir[a], line.ray.org[a]);
-  const double pad = std::fabs(t0) * 0x1p-48;
-  line.smin = (static_cast<double>(r.tmin) - t0) - pad;
-  line.smax = (static_cast<double>(r.tmax) - t0) + pad;
+  for (int round = 0;; ++round) {
+    line.t_base += t0;
+    for (int a = 0; a < 3; ++a) line.ray.org[a] = std::fma(t0, line.ray.dir[a], line.ray.org[a]);
+    // The next round re-enters the box from the new point along the whole
+    // line (the ray's interval is applied below, through t_base).
+    t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
+    if (round == 3 || !far_out() || !dda_clip(line.ray, lo, hi, t0, t1)) break;
+  }
+  const double pad = std::fabs(line.t_base) * 0x1p-48;
+  line.smin = (static_cast<double>(r.tmin) - line.t_base) - pad;
+  line.smax = (static_cast<double>(r.tmax) - line.t_base) + pad;
   return line;
 }
 
