@@ -28,7 +28,9 @@ printf '\007{"meshes":[{"file":"input.obj"}],"camera":{"from":[0,0,5],"at":[0,0,
 # Ray seeds: a ray into the scene, an axis-parallel one with -0 components, a negative tmin,
 # and four rays this fuzzer found: a direction of 2^-148 (its reciprocal and margins overflow),
 # an origin 2^50 away (the grids' walk lost a cell to rounding), hits beyond FLT_MAX, and an
-# origin 2^104 away with |dir| = 0.003 (one rebase of the grids' walk still left it 2^51 out).
+# origin 2^104 away with |dir| = 0.003 (one rebase of the grids' walk still left it 2^51 out);
+# and a pair that made Embree's stream API abort: a direction of 2^-82 beside a ray whose
+# negative tmin moves its origin 7e14 away.
 /usr/bin/python3 - "$work/rays" <<'PY'
 import struct, sys
 rays = [(0.5, 0.5, -1, 0, 0, 1, 0, float('inf')), (0.5, 0.5, -1, -0.0, -0.0, 1, 1e-3, float('inf')),
@@ -39,7 +41,9 @@ rays = [(0.5, 0.5, -1, 0, 0, 1, 0, float('inf')), (0.5, 0.5, -1, -0.0, -0.0, 1, 
         (float.fromhex('0x1.b6p-1'), 0.5, -float.fromhex('0x1.001p+104'), 0, 0, float.fromhex('0x1.fcp-128'), 0,
          float('inf')),
         (float.fromhex('0x1.fad8p-136'), float.fromhex('0x1.007ep-111'), -float.fromhex('0x1.01e7p+104'), 0, 0,
-         float.fromhex('0x1.7fp-9'), 0, float('inf'))]
+         float.fromhex('0x1.7fp-9'), 0, float('inf')),
+        (-float.fromhex('0x1.2d2d2cp-82'),) * 8,
+        (-float.fromhex('0x1.979796p+24'),) * 7 + (float.fromhex('0x1.00658p-132'),)]
 open(sys.argv[1] + '/seed', 'wb').write(b''.join(struct.pack('<8f', *r) for r in rays))
 PY
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0}

@@ -19,10 +19,16 @@ namespace raylab::embree_adapter {
 // 1.844e18 in magnitude. Our rays are wider, so map_ray converts them: a
 // segment that starts behind the origin (tmin < 0) is traced from the point
 // at tmin (rounded to float, so distances can differ in the last bits from a
-// structure that keeps the original origin), and a direction beyond
-// FLT_LARGE is scaled by a power of two (exact), distances by the inverse;
-// denormal components become zeros. Hit distances map back as
-// t = t_embree * scale + shift (a NaN distance from Embree is a miss). Rays
+// structure that keeps the original origin), a direction beyond FLT_LARGE
+// is scaled down by a power of two (exact), distances by the inverse, and a
+// direction shorter than kEmbreeSmallDirection is scaled up the same way to
+// a largest component in [0.5, 1): Embree's stream kernel, given such a ray
+// (reciprocals near 1e25) in one packet with a ray from 7e14 away, fails
+// its own assertion `cur != BVH::emptyNode` and aborts the process (found by
+// fuzz_rays, embree:api=stream). Denormal components left after scaling
+// become zeros. Hit distances map back as t = t_embree * scale + shift,
+// computed in double (a NaN distance from Embree, or one beyond FLT_MAX
+// after the mapping, is a miss). Rays
 // whose origin (after the shift) is beyond FLT_LARGE cannot be given to
 // Embree at all: the adapter reports them as misses (a documented limit of
 // the reference; no scene of ours reaches 1e18). tmin = -inf cannot be
@@ -34,7 +40,8 @@ inline constexpr float kEmbreeSmallDirection = 0x1p-40f;
 // Side-list entry for a ray that needed mapping (see map_ray).
 struct RayFix {
   size_t index = 0;  // position in the prepared set
-  float shift = 0.0f, scale = 1.0f;
+  float shift = 0.0f;
+  double scale = 1.0;  // up to 2^149 for a denormal direction: not a float
   float tmin = 0.0f, tmax = 0.0f;  // the ray's own range: mapped hits are clamped to it
   bool traced = true;  // false: a miss without asking Embree (masked in packets; a dummy ray otherwise)
 };
@@ -101,19 +108,20 @@ inline bool map_ray(const Ray& r, RTCRay& ray, RayFix& fix) {
     tmax -= tmin;
     tmin = 0.0f;
   }
+  const float dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
+  int e = 0;  // the direction is scaled by 2^-e, distances by 2^e
+  if (dmax > kEmbreeLarge) std::frexp(dmax / kEmbreeLarge, &e);  // 2^e > dmax / large
+  else if (dmax < kEmbreeSmallDirection) std::frexp(dmax, &e);    // dmax = m 2^e, m in [0.5, 1)
+  if (e != 0) {
+    for (float& d : dir) d = std::ldexp(d, -e);
+    tmin = std::ldexp(tmin, e);
+    tmax = std::ldexp(tmax, e);
+    fix.scale = std::ldexp(1.0, -e);
+  }
   // Denormal components become signed zeros: Embree's kernels run with
   // denormals flushed and return NaN distances for them (found by fuzz_rays).
   for (float& d : dir)
     if (std::fabs(d) < FLT_MIN) d = std::copysign(0.0f, d);
-  const float dmax = std::max({std::fabs(dir[0]), std::fabs(dir[1]), std::fabs(dir[2])});
-  if (dmax > kEmbreeLarge) {
-    int e = 0;
-    std::frexp(dmax / kEmbreeLarge, &e);  // 2^e > dmax / large
-    for (float& d : dir) d = std::ldexp(d, -e);
-    tmin = std::ldexp(tmin, e);
-    tmax = std::ldexp(tmax, e);
-    fix.scale = std::ldexp(1.0f, -e);
-  }
   for (float o : org) fix.traced &= std::fabs(o) <= kEmbreeLarge;
   if (!fix.traced) set_dummy_ray(ray);
   else set_embree_ray(ray, org, dir, std::max(0.0f, tmin), tmax);
@@ -144,8 +152,11 @@ inline void fix_hit(const RayFix& f, Hit& h) {
     h = Hit{};
     return;
   }
+  if (!h.valid()) return;
   // Clamped to the ray's range: the mapping back may round just outside it.
-  if (h.valid()) h.t = std::clamp(h.t * f.scale + f.shift, f.tmin, f.tmax);
+  const float t = static_cast<float>(static_cast<double>(h.t) * f.scale + f.shift);
+  if (!std::isfinite(t)) h = Hit{};  // beyond FLT_MAX: a miss, as for every structure
+  else h.t = std::clamp(t, f.tmin, f.tmax);
 }
 
 }  // namespace raylab::embree_adapter
