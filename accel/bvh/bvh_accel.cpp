@@ -104,15 +104,17 @@ SphereBvhView sphere_bvh_view(const SphereBvh& bvh) {
 using Bvh2Kernel = BinaryTreeKernel<Bvh2Layout, Bvh2View, bvh2_view, outline_bvh2>;
 using SphereKernel = BinaryTreeKernel<SphereBvh, SphereBvhView, sphere_bvh_view, outline_sphere_bvh>;
 
-// The wide layouts test triangles with the vectorised watertight test only.
+// The wide layouts test triangles with the vectorised watertight test, or
+// with tri=mt the vectorised Moller-Trumbore test on blocks holding edges
+// (a study option: what watertightness costs on the same tree and walk).
 // kScalar: `simd=0`, the same tree and walk with scalar tests (traverse_wide.h).
 template <int N, int W, bool kScalar = false>
 class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kernel> {
   using Batch = BatchAccelerator<WideKernel<N, W, kScalar>, Kernel>;
 
  public:
-  WideKernel(WideBvh<N, W> bvh, bool packets)
-      : Batch(TriangleTest::Watertight), bvh_(std::move(bvh)), packets_(packets) {
+  WideKernel(WideBvh<N, W> bvh, bool packets, TriangleTest tri)
+      : Batch(tri), bvh_(std::move(bvh)), packets_(packets) {
     view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref, wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.
     if (packets_ && bvh_.nodes.size() > (wide_ref::kLeafBit >> 3))
@@ -132,9 +134,10 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kern
     Batch::intersect(rays, hits, stats);
   }
 
-  template <TriangleTest, bool kAnyHit, bool kCount>
+  template <TriangleTest kTest, bool kAnyHit, bool kCount>
   Hit trace(const Ray& ray, TraversalStats* stats) const {
-    return traverse_wide<N, W, kAnyHit, kCount, kScalar>(view_, ray, stats);
+    if constexpr (kScalar) return traverse_wide<N, W, kAnyHit, kCount, true>(view_, ray, stats);  // watertight only
+    else return traverse_wide<N, W, kAnyHit, kCount, false, kTest>(view_, ray, stats);
   }
   void outline(int max_depth, StructureOutline& out) const override { outline_wide(bvh_, max_depth, out); }
   size_t bytes() const { return bvh_.bytes(); }
@@ -147,8 +150,9 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kern
 
 template <int N, int W, bool kScalar = false>
 std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
-                                         size_t& bytes) {
-  auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh), packets);
+                                         TriangleTest tri, size_t& bytes) {
+  const bool edges = tri == TriangleTest::MollerTrumbore;
+  auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh, edges), packets, tri);
   bytes = k->bytes();
   return k;
 }
@@ -304,16 +308,16 @@ class BvhAccel final : public Accelerator {
     const int block = block_width();
     const bool packets = cfg_.packet == kPacketSize;
     if (!cfg_.simd) {  // block=8 (checked by the spec parser)
-      if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, bytes);
-      else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, bytes);
+      if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
+      else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
-      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, bytes);
-      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, cfg_.tri, bytes);
     } else {
-      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, bytes);
-      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, cfg_.tri, bytes);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, cfg_.tri, bytes);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, cfg_.tri, bytes);
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
@@ -354,7 +358,7 @@ AcceleratorInfo bvh_accelerator_info() {
         integer_in(0, 1000)},
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
-       triangle_test_param("; mt with layout=bvh2 only"),
+       triangle_test_param("; mt: not with simd=0 or packet=16"),
        {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches: 16 rays from one origin as one frustum, other rays singly)",
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
@@ -396,14 +400,14 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
-        if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2)
-          throw SpecError("bvh: tri=mt is only available with layout=bvh2 (wide layouts use the vectorised watertight test)");
+        if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))
+          throw SpecError("bvh: tri=mt with a wide layout needs simd=1 and packet=0 (the scalar and packet tests are watertight only)");
         return std::make_unique<BvhAccel>(c);
       }};
   info.caps.mt_variant = "tri=mt,layout=bvh2";
   info.caps.scalar_variant = "simd=0";
   info.caps.outline = true;
-  info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:builder=sweep",
+  info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
                 "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };

@@ -8,7 +8,7 @@
 namespace raylab {
 
 template <int N, int W>
-WideBvh<N, W> make_wide_bvh(const WideTree& t, const TriangleMesh& mesh) {
+WideBvh<N, W> make_wide_bvh(const WideTree& t, const TriangleMesh& mesh, bool edges) {
   WideBvh<N, W> out;
   const size_t leaves = t.leaf_count();
   std::vector<uint32_t> first_block(leaves + 1, 0);
@@ -23,9 +23,12 @@ WideBvh<N, W> make_wide_bvh(const WideTree& t, const TriangleMesh& mesh) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const uint32_t* prims = t.leaf_prims.data() + t.leaf_begin[i];
       const int count = static_cast<int>(t.leaf_size(i));
-      for (int b = 0; b < count; b += W)
-        fill_block<W>(out.blocks[first_block[i] + b / W], prims + b, std::min(W, count - b),
-                      [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
+      const auto vertex = [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); };
+      for (int b = 0; b < count; b += W) {
+        TriangleBlock<W>& blk = out.blocks[first_block[i] + b / W];
+        if (edges) fill_block_mt<W>(blk, prims + b, std::min(W, count - b), vertex);
+        else fill_block<W>(blk, prims + b, std::min(W, count - b), vertex);
+      }
     }
   });
   auto leaf_ref = [&](uint32_t leaf) {
@@ -64,11 +67,11 @@ WideBvh<N, W> make_wide_bvh(const WideTree& t, const TriangleMesh& mesh) {
   return out;
 }
 
-template WideBvh<4, 4> make_wide_bvh<4, 4>(const WideTree&, const TriangleMesh&);
-template WideBvh<4, 8> make_wide_bvh<4, 8>(const WideTree&, const TriangleMesh&);
-template WideBvh<4, 16> make_wide_bvh<4, 16>(const WideTree&, const TriangleMesh&);
-template WideBvh<8, 4> make_wide_bvh<8, 4>(const WideTree&, const TriangleMesh&);
-template WideBvh<8, 8> make_wide_bvh<8, 8>(const WideTree&, const TriangleMesh&);
-template WideBvh<8, 16> make_wide_bvh<8, 16>(const WideTree&, const TriangleMesh&);
+template WideBvh<4, 4> make_wide_bvh<4, 4>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<4, 8> make_wide_bvh<4, 8>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<4, 16> make_wide_bvh<4, 16>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<8, 4> make_wide_bvh<8, 4>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<8, 8> make_wide_bvh<8, 8>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<8, 16> make_wide_bvh<8, 16>(const WideTree&, const TriangleMesh&, bool);
 
 }  // namespace raylab

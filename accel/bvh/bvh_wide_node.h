@@ -61,6 +61,8 @@ struct WideBvh {
 
 // Converts the collapsed tree into nodes and blocks (parallel over leaves).
 template <int N, int W>
-WideBvh<N, W> make_wide_bvh(const WideTree& tree, const TriangleMesh& mesh);
+// edges: blocks hold (p0, p1 - p0, p2 - p0) for the Moller-Trumbore block test
+// (tri=mt), else the three vertices.
+WideBvh<N, W> make_wide_bvh(const WideTree& tree, const TriangleMesh& mesh, bool edges = false);
 
 }  // namespace raylab

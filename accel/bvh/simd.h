@@ -131,6 +131,21 @@ struct vfloat {
     }
     return r;
   }
+  // a & b and a ^ b on the bits.
+  friend vfloat and_bits(const vfloat& a, const vfloat& b) { return bitwise(a, b, [](uint32_t x, uint32_t y) { return x & y; }); }
+  friend vfloat xor_bits(const vfloat& a, const vfloat& b) { return bitwise(a, b, [](uint32_t x, uint32_t y) { return x ^ y; }); }
+  template <typename Op>
+  static vfloat bitwise(const vfloat& a, const vfloat& b, Op op) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      uint32_t x, y;
+      std::memcpy(&x, &a.v[i], 4);
+      std::memcpy(&y, &b.v[i], 4);
+      x = op(x, y);
+      std::memcpy(&r.v[i], &x, 4);
+    }
+    return r;
+  }
   // Float min/max through the integer order of the bits (see vfloat<8>).
   static int32_t signed_bits(float f) {
     int32_t x;
@@ -185,7 +200,9 @@ V fmadd_by_lanes(V a, V b, V c) {
   friend vfloat operator-(vfloat a, vfloat b) { return {MM##_sub_ps(a.v, b.v)}; }  \
   friend vfloat operator*(vfloat a, vfloat b) { return {MM##_mul_ps(a.v, b.v)}; }  \
   friend vfloat operator/(vfloat a, vfloat b) { return {MM##_div_ps(a.v, b.v)}; }  \
-  friend vfloat andnot(vfloat a, vfloat b) { return {MM##_andnot_ps(a.v, b.v)}; }
+  friend vfloat andnot(vfloat a, vfloat b) { return {MM##_andnot_ps(a.v, b.v)}; }  \
+  friend vfloat and_bits(vfloat a, vfloat b) { return {MM##_and_ps(a.v, b.v)}; }   \
+  friend vfloat xor_bits(vfloat a, vfloat b) { return {MM##_xor_ps(a.v, b.v)}; }
 
 // Float min/max (x86: the second operand wins when either is NaN).
 #define RAYLAB_VF_MIN_MAX(MM)                                                      \

@@ -436,8 +436,12 @@ inline uint64_t count_children(const WideNode<N>& node) {
 // already hold a hit from elsewhere in the tree: the packet traversal hands
 // diverged rays over this way). Returns when the subtree is done or, any
 // hit, at the first hit.
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false>
+// kTest: the leaf test, watertight, or Moller-Trumbore on blocks holding
+// edges (tri=mt, a study option; never with kScalar).
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false,
+          TriangleTest kTest = TriangleTest::Watertight>
 inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
+  static_assert(!(kScalar && kTest != TriangleTest::Watertight), "simd=0 tests watertight only");
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
@@ -446,7 +450,8 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
     if constexpr (kScalar) return ScalarNodeRay(nr);
     else return ScalarNodeRay{};
   }();
-  BlockRay<W> br{};  // filled at the first leaf
+  using LeafRay = std::conditional_t<kTest == TriangleTest::MollerTrumbore, BlockRayMT<W>, BlockRay<W>>;
+  LeafRay br{};  // filled at the first leaf
   // The scalar leaf test's constants (kScalar only; the default ray's otherwise, unused).
   [[maybe_unused]] const WatertightRay wr = [&] {
     if constexpr (kScalar) return WatertightRay(ray);
@@ -509,7 +514,8 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
 
     // Leaf: test its triangle blocks.
     if (!kScalar && !br_ready) {
-      br.init(WatertightRay(ray));
+      if constexpr (kTest == TriangleTest::MollerTrumbore) br.init(ray);
+      else br.init(WatertightRay(ray));
       br_ready = true;
     }
     const TriangleBlock<W>* blocks = bvh.blocks + wide_ref::leaf_first(cur);
@@ -522,24 +528,24 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
   }
 }
 
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar>
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar, TriangleTest kTest>
 inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
-  walk_wide<N, W, kAnyHit, kCount, kAxisParallel, kScalar>(bvh, ray, bvh.root_ref, rec);
+  walk_wide<N, W, kAnyHit, kCount, kAxisParallel, kScalar, kTest>(bvh, ray, bvh.root_ref, rec);
   return rec.hit();
 }
 
 // The traversal entry point: validity check, then the kernel for the ray's
-// kind. kScalar: the scalar tests of `bvh:simd=0`.
-template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false>
+// kind. kScalar: the scalar tests of `bvh:simd=0`; kTest: see walk_wide.
+template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight>
 inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
   if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
   // The fast kernel needs finite reciprocals, tmin >= 0 (see
   // intersect_children) and an origin not far beyond the scene
   // (wide_fma_origin_limit); everything else takes the exact form.
   if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f) || origin_beyond(ray, bvh.fma_origin_limit)) [[unlikely]]
-    return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar>(bvh, ray, stats);
-  return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar>(bvh, ray, stats);
+    return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar, kTest>(bvh, ray, stats);
+  return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar, kTest>(bvh, ray, stats);
 }
 
 }  // namespace raylab

@@ -16,6 +16,11 @@
 // layouts do) would change the rounding of p - org and break the shared-edge
 // argument. Lanes past a leaf's last triangle repeat its first triangle (same
 // answer, no masking needed in the hot loop).
+//
+// The study option tri=mt of the wide BVH stores (p0, p1 - p0, p2 - p0)
+// instead and tests with intersect_block_mt (Moller and Trumbore 1997, the
+// form of the fastest CPU tracers): not watertight, there to measure what
+// watertightness costs on the same tree and walk.
 #include <cstdint>
 
 #include "accel/bvh/simd.h"
@@ -63,6 +68,19 @@ struct BlockRay {
     off_x = w.kx * W;
     off_y = w.ky * W;
     off_z = w.kz * W;
+  }
+};
+
+// Per-ray constants of the Moller-Trumbore block test: origin and direction.
+template <int W>
+struct BlockRayMT {
+  using V = simd::vfloat<W>;
+  V ox, oy, oz, dx, dy, dz;
+  BlockRayMT() = default;
+  explicit BlockRayMT(const Ray& r) { init(r); }
+  void init(const Ray& r) {
+    ox = V::broadcast(r.org.x()), oy = V::broadcast(r.org.y()), oz = V::broadcast(r.org.z());
+    dx = V::broadcast(r.dir.x()), dy = V::broadcast(r.dir.y()), dz = V::broadcast(r.dir.z());
   }
 };
 
@@ -154,14 +172,65 @@ template <int W>
   return mask;
 }
 
+// Moller-Trumbore on all W lanes of a block holding (p0, e1 = p1 - p0,
+// e2 = p2 - p0) per lane, in the order of intersect_moller_trumbore: P = D x
+// e2, det = e1 . P, S = O - p0, u = (S . P) / det, Q = S x e1, v = (D . Q) /
+// det, t = (e2 . Q) / det; a hit when det != 0, u, v >= 0, u + v <= 1 and
+// tmin <= t <= tmax. Dot products sum as Eigen's do for 3-vectors,
+// x0 + (x1 + x2), so every lane equals the scalar test bit for bit. One exact division, after the edge tests have found a
+// lane worth it (their signs are compared with det's instead).
+template <int W>
+[[gnu::always_inline]] inline uint32_t intersect_block(const TriangleBlock<W>& blk, const BlockRayMT<W>& r, float tmin,
+                                                       float tmax, BlockHits<W>& out) {
+  using V = simd::vfloat<W>;
+  const auto at = [&](int corner, int axis) { return V::load(&blk.v[corner][axis][0]); };
+  const V e1x = at(1, 0), e1y = at(1, 1), e1z = at(1, 2);
+  const V e2x = at(2, 0), e2y = at(2, 1), e2z = at(2, 2);
+  const V px = r.dy * e2z - r.dz * e2y;
+  const V py = r.dz * e2x - r.dx * e2z;
+  const V pz = r.dx * e2y - r.dy * e2x;
+  const V det = e1x * px + (e1y * py + e1z * pz);
+  const V sx = r.ox - at(0, 0), sy = r.oy - at(0, 1), sz = r.oz - at(0, 2);
+  const V uu = sx * px + (sy * py + sz * pz);
+  const V qx = sy * e1z - sz * e1y;
+  const V qy = sz * e1x - sx * e1z;
+  const V qz = sx * e1y - sy * e1x;
+  const V vv = r.dx * qx + (r.dy * qy + r.dz * qz);
+  const V tt = e2x * qx + (e2y * qy + e2z * qz);
+  // u >= 0, v >= 0, u + v <= 1 before dividing: uu, vv and det - uu - vv
+  // must not have the sign opposite to det's (det != 0).
+  const V zero = V::broadcast(0.0f);
+  const V sign = V::broadcast(-0.0f);
+  // The test is conservative: a product that underflows to -0 passes u >= 0,
+  // hence the floor -|det| 2^-100, and the divided sum rounds (a few ulps).
+  const V det_sign = and_bits(det, sign);
+  const V su = xor_bits(uu, det_sign), sv = xor_bits(vv, det_sign), adet = andnot(sign, det);
+  const V floor = zero - adet * V::broadcast(0x1p-100f);
+  uint32_t mask = cmp_neq(det, zero) & cmp_ge(su, floor) & cmp_ge(sv, floor) &
+                  cmp_le(su + sv, adet * V::broadcast(1.0f + 0x1p-20f));
+  if (mask == 0) return 0;
+  const V inv_det = V::broadcast(1.0f) / det;
+  const V u = uu * inv_det, v = vv * inv_det, t = tt * inv_det;
+  // The scalar test's own range tests on the divided values.
+  mask &= cmp_ge(u, zero) & cmp_le(u, V::broadcast(1.0f)) & cmp_ge(v, zero) & cmp_le(u + v, V::broadcast(1.0f));
+  mask &= cmp_ge(t, V::broadcast(tmin)) & cmp_le(t, V::broadcast(tmax));
+  if (mask != 0) {
+    t.store(out.t);
+    u.store(out.u);
+    v.store(out.v);
+  }
+  return mask;
+}
+
 // One block tested on [tmin, rec.tmax()]: its nearest hit (any hit: the
 // first lane hit) offered to the recorder; true when it was kept. The
-// caller counts the block's triangle tests.
-template <int W, typename Recorder>
-[[gnu::always_inline]] inline bool intersect_block_record(const TriangleBlock<W>& blk, const BlockRay<W>& br, float tmin,
+// caller counts the block's triangle tests. BRay: BlockRay (watertight) or
+// BlockRayMT (tri=mt).
+template <int W, typename BRay, typename Recorder>
+[[gnu::always_inline]] inline bool intersect_block_record(const TriangleBlock<W>& blk, const BRay& br, float tmin,
                                                           Recorder& rec) {
   BlockHits<W> bh;
-  uint32_t m = intersect_block<W>(blk, br, tmin, rec.tmax(), bh);
+  uint32_t m = intersect_block(blk, br, tmin, rec.tmax(), bh);
   if (m == 0) return false;
   uint32_t best = simd::ctz(m);
   float bt = bh.t[best];
@@ -180,13 +249,13 @@ template <int W, typename Recorder>
 // The wide BVH's leaf function: tests a leaf's blocks on [tmin, rec.tmax()]
 // and offers each block's nearest hit to the recorder (any hit: the first
 // lane hit). True when a hit was kept.
-template <int W, typename Recorder>
+template <int W, typename BRay, typename Recorder>
 [[gnu::always_inline]] inline bool intersect_block_leaf(const TriangleBlock<W>* blk, uint32_t nblocks,
-                                                        const BlockRay<W>& br, float tmin, Recorder& rec) {
+                                                        const BRay& br, float tmin, Recorder& rec) {
   bool kept = false;
   for (uint32_t b = 0; b < nblocks; ++b) {
     rec.count_triangles(static_cast<uint64_t>(blk[b].count()));
-    if (intersect_block_record<W>(blk[b], br, tmin, rec)) {
+    if (intersect_block_record(blk[b], br, tmin, rec)) {
       kept = true;
       if constexpr (Recorder::kStopAtFirstHit) return true;
     }
@@ -205,6 +274,20 @@ inline void fill_block(TriangleBlock<W>& blk, const uint32_t* prims, int count, 
       const Vec3f& p = vertex(prim, c);
       for (int a = 0; a < 3; ++a) blk.v[c][a][lane] = p[a];
     }
+  }
+}
+
+// The same for intersect_block_mt: p0, p1 - p0, p2 - p0 (the edges rounded
+// as intersect_moller_trumbore rounds them).
+template <int W, typename VertexFn>
+inline void fill_block_mt(TriangleBlock<W>& blk, const uint32_t* prims, int count, VertexFn&& vertex) {
+  for (int lane = 0; lane < W; ++lane) {
+    const uint32_t prim = prims[lane < count ? lane : 0];
+    blk.prim[lane] = prim;
+    const Vec3f p0 = vertex(prim, 0);
+    const Vec3f e1 = vertex(prim, 1) - p0;
+    const Vec3f e2 = vertex(prim, 2) - p0;
+    for (int a = 0; a < 3; ++a) blk.v[0][a][lane] = p0[a], blk.v[1][a][lane] = e1[a], blk.v[2][a][lane] = e2[a];
   }
 }
 
