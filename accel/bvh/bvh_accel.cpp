@@ -386,7 +386,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // opt=light (the default since session 8 of docs/bvh-speed.md): one
         // round over the worst 2 % of the nodes gains 3-5 % on every ray set
         // of the interior views for 10-20 % more build time; the full
-        // reinsertion is the preset (+12 %, 4-30x the build).
+        // reinsertion is the preset (8 % more, at 5-35x Embree's build).
         const std::string& opt = p.str("opt");
         const bool light = opt == "light";
         c.reinsert = opt != "none";
