@@ -130,7 +130,9 @@ TEST(StructureOutline, GridCellsAreTheOccupiedCells) {
     EXPECT_GT(cells, 1u);
     EXPECT_EQ(cells, stats.leaves);
     EXPECT_EQ(out.boxes.at(0).depth, 0);
-    if (name != "grid2") EXPECT_LT(cells, stats.nodes);  // empty cells are not drawn
+    if (name != "grid2") {
+      EXPECT_LT(cells, stats.nodes);  // empty cells are not drawn
+    }
   }
 }
 
