@@ -18,8 +18,8 @@
 // answer, no masking needed in the hot loop).
 //
 // The study option tri=mt of the wide BVH stores (p0, p1 - p0, p2 - p0)
-// instead and tests with intersect_block_mt (Moller and Trumbore 1997, the
-// form of the fastest CPU tracers): not watertight, there to measure what
+// instead and tests with the intersect_block overload taking a BlockRayMT
+// (Moller and Trumbore 1997, the form of the fastest CPU tracers): not watertight, there to measure what
 // watertightness costs on the same tree and walk.
 #include <cstdint>
 
@@ -177,8 +177,9 @@ template <int W>
 // e2, det = e1 . P, S = O - p0, u = (S . P) / det, Q = S x e1, v = (D . Q) /
 // det, t = (e2 . Q) / det; a hit when det != 0, u, v >= 0, u + v <= 1 and
 // tmin <= t <= tmax. Dot products sum as Eigen's do for 3-vectors,
-// x0 + (x1 + x2), so every lane equals the scalar test bit for bit. One exact division, after the edge tests have found a
-// lane worth it (their signs are compared with det's instead).
+// x0 + (x1 + x2), so every lane equals the scalar test bit for bit. One
+// exact division, once a conservative sign test (no division) has found a
+// lane worth it.
 template <int W>
 [[gnu::always_inline]] inline uint32_t intersect_block(const TriangleBlock<W>& blk, const BlockRayMT<W>& r, float tmin,
                                                        float tmax, BlockHits<W>& out) {
@@ -277,8 +278,8 @@ inline void fill_block(TriangleBlock<W>& blk, const uint32_t* prims, int count, 
   }
 }
 
-// The same for intersect_block_mt: p0, p1 - p0, p2 - p0 (the edges rounded
-// as intersect_moller_trumbore rounds them).
+// The same for the Moller-Trumbore blocks (tri=mt): p0, p1 - p0, p2 - p0
+// (the edges rounded as intersect_moller_trumbore rounds them).
 template <int W, typename VertexFn>
 inline void fill_block_mt(TriangleBlock<W>& blk, const uint32_t* prims, int count, VertexFn&& vertex) {
   for (int lane = 0; lane < W; ++lane) {
