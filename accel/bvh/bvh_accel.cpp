@@ -384,8 +384,8 @@ AcceleratorInfo bvh_accelerator_info() {
         const auto& l = c.spheres ? std::string("bvh2") : p.str("layout");
         c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : LayoutKind::Bvh8;
         // opt=light (the default since session 8 of docs/bvh-speed.md): one
-        // round over the worst 2 % of the nodes gains 3-5 % on every ray set
-        // of the interior views for 10-20 % more build time; the full
+        // round over the worst 2 % of the nodes gains 2-5 % on every ray set
+        // of the interior views for about 10 % more build time; the full
         // reinsertion is the preset (8 % more, at 5-35x Embree's build).
         const std::string& opt = p.str("opt");
         const bool light = opt == "light";
