@@ -388,8 +388,8 @@ AcceleratorInfo bvh_accelerator_info() {
         // of the interior views for about 10 % more build time; the full
         // reinsertion is the preset (8 % more, at 5-35x Embree's build).
         const std::string& opt = p.str("opt");
-        const bool light = opt == "light";
-        c.reinsert = opt != "none";
+        const bool light = opt == "light", full = opt == "reinsert";
+        c.reinsert = light || full;
         c.block = p.integer("block");
         // The leaf limit depends on the layout (a wide leaf holds at most kMaxBlocks blocks).
         c.leaf = p.str("leaf") == "auto" ? (c.layout == LayoutKind::Bvh2 ? 4 : 2 * c.block) : p.integer("leaf");
@@ -400,7 +400,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // every triangle (+4 % over bleaf=4 on the interior views, all four
         // ray sets; docs/bvh-speed.md, session 6). The collapse merges them
         // into wide leaves afterwards either way.
-        c.binary_leaf = p.str("bleaf") == "auto" ? (c.reinsert && !light ? 1 : 4) : p.integer("bleaf");
+        c.binary_leaf = p.str("bleaf") == "auto" ? (full ? 1 : 4) : p.integer("bleaf");
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("sbudget"));
         c.opt_rounds = p.str("opt_rounds") == "auto" ? (light ? 1 : 32) : p.integer("opt_rounds");

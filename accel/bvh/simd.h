@@ -119,19 +119,8 @@ struct vfloat {
   RAYLAB_VF_CMP(cmp_eq, ==)
   RAYLAB_VF_CMP(cmp_neq, !=)
 #undef RAYLAB_VF_CMP
-  // ~a & b on the bits (andnot(-0.0, x) = |x|).
-  friend vfloat andnot(const vfloat& a, const vfloat& b) {
-    vfloat r;
-    for (int i = 0; i < W; ++i) {
-      uint32_t x, y;
-      std::memcpy(&x, &a.v[i], 4);
-      std::memcpy(&y, &b.v[i], 4);
-      x = ~x & y;
-      std::memcpy(&r.v[i], &x, 4);
-    }
-    return r;
-  }
-  // a & b and a ^ b on the bits.
+  // ~a & b (andnot(-0.0, x) = |x|), a & b and a ^ b on the bits.
+  friend vfloat andnot(const vfloat& a, const vfloat& b) { return bitwise(a, b, [](uint32_t x, uint32_t y) { return ~x & y; }); }
   friend vfloat and_bits(const vfloat& a, const vfloat& b) { return bitwise(a, b, [](uint32_t x, uint32_t y) { return x & y; }); }
   friend vfloat xor_bits(const vfloat& a, const vfloat& b) { return bitwise(a, b, [](uint32_t x, uint32_t y) { return x ^ y; }); }
   template <typename Op>

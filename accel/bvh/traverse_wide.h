@@ -141,6 +141,9 @@ template <int N>
   for (int a = 0; a < 3; ++a) inv[a] = invv[a], shift_up[a] = upv[a], shift_down[a] = downv[a];
   const int neg_mask = _mm_movemask_ps(d);
 #else
+  // Exact reciprocals for every ray (SlabRay): what axis-parallel rays need,
+  // and without AVX there is no FMA kernel that would want the clamped ones.
+  (void)axis_parallel;
   const SlabRay sr(r);
   int neg_mask = 0;
   for (int a = 0; a < 3; ++a) {
