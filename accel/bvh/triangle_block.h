@@ -19,8 +19,9 @@
 //
 // The study option tri=mt of the wide BVH stores (p0, p1 - p0, p2 - p0)
 // instead and tests with the intersect_block overload taking a BlockRayMT
-// (Moller and Trumbore 1997, the form of the fastest CPU tracers): not watertight, there to measure what
-// watertightness costs on the same tree and walk.
+// (Moller and Trumbore 1997, the form of the fastest CPU tracers): not
+// watertight, there to measure what watertightness costs on the same tree
+// and walk.
 #include <cstdint>
 
 #include "accel/bvh/simd.h"
