@@ -151,6 +151,12 @@ struct vfloat {
     for (int i = 0; i < W; ++i) r.v[i] = signed_bits(a.v[i]) > signed_bits(b.v[i]) ? a.v[i] : b.v[i];
     return r;
   }
+  // Bit i set when lane i's sign bit is set (NaN and -0 included).
+  friend uint32_t sign_bits(const vfloat& a) {
+    uint32_t m = 0;
+    for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(std::signbit(a.v[i])) << i;
+    return m;
+  }
   // min/max with the x86 convention: the second operand wins when either is NaN.
   friend vfloat min(const vfloat& a, const vfloat& b) {
     vfloat r;
@@ -233,6 +239,7 @@ template <>
 struct vfloat<4> {
   __m128 v;
   RAYLAB_VF_INTRINSICS(_mm)
+  friend uint32_t sign_bits(vfloat a) { return static_cast<uint32_t>(_mm_movemask_ps(a.v)); }
   RAYLAB_VF_MIN_MAX(_mm)
 #if defined(__SSE4_1__)
   RAYLAB_VF_INTEGER_MIN_MAX(_mm, 128)
@@ -267,6 +274,7 @@ template <>
 struct vfloat<8> {
   __m256 v;
   RAYLAB_VF_INTRINSICS(_mm256)
+  friend uint32_t sign_bits(vfloat a) { return static_cast<uint32_t>(_mm256_movemask_ps(a.v)); }
   RAYLAB_VF_MIN_MAX(_mm256)
 #if defined(__AVX2__)
   RAYLAB_VF_INTEGER_MIN_MAX(_mm256, 256)
@@ -297,6 +305,9 @@ template <>
 struct vfloat<16> {
   __m512 v;
   RAYLAB_VF_INTRINSICS(_mm512)
+  friend uint32_t sign_bits(vfloat a) {
+    return _mm512_cmplt_epi32_mask(_mm512_castps_si512(a.v), _mm512_setzero_si512());
+  }
   // Zero-masking forms with a full mask: GCC 12's unmasked forms read an
   // undefined vector and trip -Wmaybe-uninitialized (as in sort_network.h).
   friend vfloat min(vfloat a, vfloat b) { return {_mm512_maskz_min_ps(0xFFFF, a.v, b.v)}; }

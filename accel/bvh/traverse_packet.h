@@ -432,7 +432,7 @@ class PacketTracer {
 
   // The watertight test of intersect_block with rays in the lanes instead of
   // triangles: for each lane the same operations in the same order on the
-  // same values (translate, shear, edge functions, the double-precision
+  // same values (translate, fused shear, edge functions, the double-precision
   // recomputation of an exactly-zero edge function, sign test, t = tt *
   // (1 / det)), so each ray gets bit for bit the t, u, v its single-ray test
   // gives. The rays share their origin, so a vertex's translation p - org is
@@ -461,7 +461,9 @@ class PacketTracer {
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < 3; ++k)
         (VW::load(blk.v[c][axis[k]]) - VW::broadcast(r.org[axis[k]])).store(rel[c][k]);
-    const VL sx = VL::load(r.sx + first), sy = VL::load(r.sy + first), sz = VL::load(r.sz + first);
+    const VL sign = VL::broadcast(-0.0f);
+    const VL nsx = xor_bits(VL::load(r.sx + first), sign), nsy = xor_bits(VL::load(r.sy + first), sign);
+    const VL sz = VL::load(r.sz + first);
     const VL tmin = VL::load(r.tmin_lane + first);
     const VL zero = VL::broadcast(0.0f);
     const int count = blk.count();  // padding lanes repeat the first triangle
@@ -469,12 +471,12 @@ class PacketTracer {
       const VL az0 = VL::broadcast(rel[0][2][j]);
       const VL bz0 = VL::broadcast(rel[1][2][j]);
       const VL cz0 = VL::broadcast(rel[2][2][j]);
-      const VL ax = VL::broadcast(rel[0][0][j]) - sx * az0;
-      const VL ay = VL::broadcast(rel[0][1][j]) - sy * az0;
-      const VL bx = VL::broadcast(rel[1][0][j]) - sx * bz0;
-      const VL by = VL::broadcast(rel[1][1][j]) - sy * bz0;
-      const VL cx = VL::broadcast(rel[2][0][j]) - sx * cz0;
-      const VL cy = VL::broadcast(rel[2][1][j]) - sy * cz0;
+      const VL ax = fmadd(nsx, az0, VL::broadcast(rel[0][0][j]));
+      const VL ay = fmadd(nsy, az0, VL::broadcast(rel[0][1][j]));
+      const VL bx = fmadd(nsx, bz0, VL::broadcast(rel[1][0][j]));
+      const VL by = fmadd(nsy, bz0, VL::broadcast(rel[1][1][j]));
+      const VL cx = fmadd(nsx, cz0, VL::broadcast(rel[2][0][j]));
+      const VL cy = fmadd(nsy, cz0, VL::broadcast(rel[2][1][j]));
       VL u = cx * by - cy * bx;
       VL v = ax * cy - ay * cx;
       VL w = bx * ay - by * ax;
@@ -487,7 +489,7 @@ class PacketTracer {
       const VL det = u + v + w;
       mask &= cmp_neq(det, zero);
       if (mask == 0) continue;
-      const VL tt = u * (sz * az0) + v * (sz * bz0) + w * (sz * cz0);
+      const VL tt = sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
       const VL inv_det = VL::broadcast(1.0f) / det;
       const VL t = tt * inv_det;
       mask &= cmp_ge(t, tmin) & cmp_le(t, h.t);

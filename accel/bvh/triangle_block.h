@@ -5,12 +5,12 @@
 // 2013) on all W lanes at once.
 //
 // The vector test computes exactly what the scalar intersect_watertight()
-// computes, lane by lane: the same translation p - org, the same shear
-// (mul then sub, never fused), the same edge functions cx*by - cy*bx etc.
-// (so a shared edge gives exactly opposite values in its two triangles), the
-// same double-precision recomputation when an edge function is exactly 0,
-// and the same t = (u*az + v*bz + w*cz) * (1/det). Watertightness therefore
-// carries over unchanged, and tests compare the two bit for bit.
+// computes, lane by lane: the same translation p - org, the same fused shear,
+// the same edge functions cx*by - cy*bx etc. (never fused, so a shared edge
+// gives exactly opposite values in its two triangles), the same
+// double-precision recomputation when an edge function is exactly 0, and the
+// same t = sz * fma(w, cz, fma(v, bz, u*az)) * (1/det). Watertightness
+// therefore carries over unchanged, and tests compare the two bit for bit.
 //
 // Only the vertices are stored: precomputing edges (as Moller-Trumbore
 // layouts do) would change the rounding of p - org and break the shared-edge
@@ -54,7 +54,7 @@ template <int W>
 struct BlockRay {
   using V = simd::vfloat<W>;
   V ox, oy, oz;            // origin components along kx, ky, kz
-  V sx, sy, sz;            // shear constants
+  V nsx, nsy, sz;          // shear constants, the first two negated (x - sx*z is fmadd(-sx, z, x))
   int off_x, off_y, off_z; // kx*W, ky*W, kz*W: offsets of the permuted axes in a block
 
   BlockRay() = default;
@@ -63,8 +63,8 @@ struct BlockRay {
     ox = V::broadcast(w.org[w.kx]);
     oy = V::broadcast(w.org[w.ky]);
     oz = V::broadcast(w.org[w.kz]);
-    sx = V::broadcast(w.sx);
-    sy = V::broadcast(w.sy);
+    nsx = V::broadcast(-w.sx);
+    nsy = V::broadcast(-w.sy);
     sz = V::broadcast(w.sz);
     off_x = w.kx * W;
     off_y = w.ky * W;
@@ -126,30 +126,38 @@ template <int W>
   const V az0 = V::load(p0 + r.off_z) - r.oz;
   const V bz0 = V::load(p1 + r.off_z) - r.oz;
   const V cz0 = V::load(p2 + r.off_z) - r.oz;
-  const V ax = (V::load(p0 + r.off_x) - r.ox) - r.sx * az0;
-  const V ay = (V::load(p0 + r.off_y) - r.oy) - r.sy * az0;
-  const V bx = (V::load(p1 + r.off_x) - r.ox) - r.sx * bz0;
-  const V by = (V::load(p1 + r.off_y) - r.oy) - r.sy * bz0;
-  const V cx = (V::load(p2 + r.off_x) - r.ox) - r.sx * cz0;
-  const V cy = (V::load(p2 + r.off_y) - r.oy) - r.sy * cz0;
+  const V ax = fmadd(r.nsx, az0, V::load(p0 + r.off_x) - r.ox);
+  const V ay = fmadd(r.nsy, az0, V::load(p0 + r.off_y) - r.oy);
+  const V bx = fmadd(r.nsx, bz0, V::load(p1 + r.off_x) - r.ox);
+  const V by = fmadd(r.nsy, bz0, V::load(p1 + r.off_y) - r.oy);
+  const V cx = fmadd(r.nsx, cz0, V::load(p2 + r.off_x) - r.ox);
+  const V cy = fmadd(r.nsy, cz0, V::load(p2 + r.off_y) - r.oy);
 
   V u = cx * by - cy * bx;
   V v = ax * cy - ay * cx;
   V w = bx * ay - by * ax;
   const V zero = V::broadcast(0.0f);
-  const uint32_t zeros = cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero);
-  if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
-  // Reject when the edge functions have mixed signs (a lane with a NaN edge
-  // function passes here, as in the scalar test, and fails the range test).
-  const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
-  const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
   constexpr uint32_t kAll = W == 32 ? ~0u : (1u << W) - 1u;
-  uint32_t mask = ~(neg & pos) & kAll;
-  if (mask == 0) return 0;
+  const uint32_t zeros = cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero);
+  uint32_t mask;
+  if (zeros == 0) [[likely]] {
+    // No edge function is 0, so "not of mixed signs" is "the same sign bit"
+    // (two xors instead of six comparisons); a NaN lane may pass either way
+    // and fails the range test. Terms of one sign, none 0, never sum to 0,
+    // so det != 0 needs no test here.
+    mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & kAll;
+    if (mask == 0) return 0;
+  } else {
+    recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
+    // Reject when the edge functions have mixed signs (a lane with a NaN edge
+    // function passes here, as in the scalar test, and fails the range test).
+    const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
+    const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
+    mask = ~(neg & pos) & kAll & cmp_neq(u + v + w, zero);
+    if (mask == 0) return 0;
+  }
   const V det = u + v + w;
-  mask &= cmp_neq(det, zero);
-  if (mask == 0) return 0;
-  const V tt = u * (r.sz * az0) + v * (r.sz * bz0) + w * (r.sz * cz0);
+  const V tt = r.sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
   if (tmin >= 0.0f) {
     // Behind the origin without dividing: where tt and det have opposite
     // signs, t = tt * (1 / det) is negative, hence < tmin -- unless it

@@ -6,10 +6,19 @@
 // so that it points along +z of a permuted frame, and the 2D edge functions of
 // the projected triangle decide the hit. A shared edge yields edge functions of
 // exactly opposite sign in its two triangles, so a ray can never slip between
-// them. That holds only if a*b - c*d is evaluated without fused multiply-adds:
-// the project compiles with -ffp-contract=off for this reason. When an edge
-// function is exactly zero the three are recomputed in double precision, as
-// the paper prescribes, so hits on edges and vertices are decided consistently.
+// them. That holds only if a*b - c*d is evaluated without fused multiply-adds
+// (a fused form rounds one product and not the other, so the two triangles'
+// values would no longer be exact negatives): the project compiles with
+// -ffp-contract=off for this reason. When an edge function is exactly zero the
+// three are recomputed in double precision, as the paper prescribes, so hits on
+// edges and vertices are decided consistently.
+//
+// Fused multiply-adds are used where the argument allows them: the shear
+// x - sx * z of a translated vertex is one fma (a vertex gets the same sheared
+// coordinates in every triangle that shares it, which is all the argument
+// needs), and so is the distance's weighted sum u*az + v*bz + w*cz. Both cut
+// the vector block test's work (triangle_block.h), which computes the same
+// values lane by lane.
 //
 // Moller-Trumbore (1997) is kept for the accuracy study (spec option tri=mt).
 #include <cmath>
@@ -52,12 +61,12 @@ inline bool intersect_watertight(const WatertightRay& w, const Vec3f& p0, const 
   const Vec3f a = p0 - w.org;
   const Vec3f b = p1 - w.org;
   const Vec3f c = p2 - w.org;
-  const float ax = a[w.kx] - w.sx * a[w.kz];
-  const float ay = a[w.ky] - w.sy * a[w.kz];
-  const float bx = b[w.kx] - w.sx * b[w.kz];
-  const float by = b[w.ky] - w.sy * b[w.kz];
-  const float cx = c[w.kx] - w.sx * c[w.kz];
-  const float cy = c[w.ky] - w.sy * c[w.kz];
+  const float ax = std::fma(-w.sx, a[w.kz], a[w.kx]);
+  const float ay = std::fma(-w.sy, a[w.kz], a[w.ky]);
+  const float bx = std::fma(-w.sx, b[w.kz], b[w.kx]);
+  const float by = std::fma(-w.sy, b[w.kz], b[w.ky]);
+  const float cx = std::fma(-w.sx, c[w.kz], c[w.kx]);
+  const float cy = std::fma(-w.sy, c[w.kz], c[w.ky]);
 
   // Edge functions: U is the weight of p0 (edge p1-p2), V of p1, W of p2.
   float u = cx * by - cy * bx;
@@ -72,10 +81,10 @@ inline bool intersect_watertight(const WatertightRay& w, const Vec3f& p0, const 
   const float det = u + v + wgt;
   if (det == 0.0f) return false;
 
-  const float az = w.sz * a[w.kz];
-  const float bz = w.sz * b[w.kz];
-  const float cz = w.sz * c[w.kz];
-  const float tt = u * az + v * bz + wgt * cz;
+  // t = sz * (u*az + v*bz + w*cz) / det (az etc.: the translated vertices'
+  // kz components), summed in det's order so that a triangle at a constant
+  // depth gets tt = sz * az * det exactly.
+  const float tt = w.sz * std::fma(wgt, c[w.kz], std::fma(v, b[w.kz], u * a[w.kz]));
   const float inv_det = 1.0f / det;
   const float t = tt * inv_det;
   // Also rejects NaN t (degenerate input) because the comparisons fail.
