@@ -252,9 +252,10 @@ inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr
     if (lanes == 0) continue;
     const V dz = V::load(in.dir[kz]);
     alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize];
-    (V::load(in.dir[kx]) / dz).store(sx);
-    (V::load(in.dir[ky]) / dz).store(sy);
-    (one / dz).store(sz);
+    const V inv_dz = one / dz;
+    (V::load(in.dir[kx]) * inv_dz).store(sx);
+    (V::load(in.dir[ky]) * inv_dz).store(sy);
+    inv_dz.store(sz);
     for (uint32_t m = lanes; m != 0; m &= m - 1) {
       const uint32_t i = simd::ctz(m);
       pr.sx[i] = sx[i], pr.sy[i] = sy[i], pr.sz[i] = sz[i];

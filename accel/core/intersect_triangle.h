@@ -48,9 +48,11 @@ struct WatertightRay {
     ky = (kx + 1) % 3;
     // Keep the winding of the projected triangle: swap when looking down -z.
     if (r.dir[kz] < 0.0f) std::swap(kx, ky);
-    sx = r.dir[kx] / r.dir[kz];
-    sy = r.dir[ky] / r.dir[kz];
+    // One division: the shear only has to be the same for every triangle a
+    // ray meets, not the correctly rounded quotient.
     sz = 1.0f / r.dir[kz];
+    sx = r.dir[kx] * sz;
+    sy = r.dir[ky] * sz;
   }
 };
 
