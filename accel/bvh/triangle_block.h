@@ -146,17 +146,20 @@ template <int W>
     // and fails the range test. Terms of one sign, none 0, never sum to 0,
     // so det != 0 needs no test here.
     mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & kAll;
-    if (mask == 0) return 0;
   } else {
     recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
     // Reject when the edge functions have mixed signs (a lane with a NaN edge
     // function passes here, as in the scalar test, and fails the range test).
     const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
     const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
-    mask = ~(neg & pos) & kAll & cmp_neq(u + v + w, zero);
+    mask = ~(neg & pos) & kAll;
+  }
+  if (mask == 0) return 0;
+  const V det = u + v + w;
+  if (zeros != 0) {  // only here can det be 0 (see above)
+    mask &= cmp_neq(det, zero);
     if (mask == 0) return 0;
   }
-  const V det = u + v + w;
   const V tt = r.sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
   if (tmin >= 0.0f) {
     // Behind the origin without dividing: where tt and det have opposite
