@@ -26,7 +26,7 @@
 // fixed array; popped entries farther than the current closest hit are
 // skipped. The triangle test's per-ray constants: closest hit computes them
 // at the first leaf (many rays never reach one), any hit at the start, where
-// their latency (dominant axis, three divisions) overlaps the first node
+// their latency (dominant axis, a division) overlaps the first node
 // tests instead of delaying the first leaf test: shadow rays leave after a
 // few nodes, and this measured 1.5-3 % faster on them (2026-11-27), while
 // closest hit lost 2-4 % with it (more state live through the node loop).
