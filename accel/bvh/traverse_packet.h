@@ -482,14 +482,23 @@ class PacketTracer {
       VL v = ax * cy - ay * cx;
       VL w = bx * ay - by * ax;
       const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
-      if (zeros != 0) [[unlikely]] recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
-      const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
-      const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
-      uint32_t mask = ~(neg & pos) & active;
+      uint32_t mask;
+      if (zeros == 0) [[likely]] {
+        // As intersect_block: no edge function is 0, so the sign bits decide,
+        // and det cannot be 0.
+        mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & active;
+      } else {
+        recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
+        const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
+        const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
+        mask = ~(neg & pos) & active;
+      }
       if (mask == 0) continue;
       const VL det = u + v + w;
-      mask &= cmp_neq(det, zero);
-      if (mask == 0) continue;
+      if (zeros != 0) {
+        mask &= cmp_neq(det, zero);
+        if (mask == 0) continue;
+      }
       const VL tt = sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
       const VL inv_det = VL::broadcast(1.0f) / det;
       const VL t = tt * inv_det;
