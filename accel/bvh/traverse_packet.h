@@ -466,7 +466,6 @@ class PacketTracer {
     const VL nsx = xor_bits(VL::load(r.sx + first), sign), nsy = xor_bits(VL::load(r.sy + first), sign);
     const VL sz = VL::load(r.sz + first);
     const VL tmin = VL::load(r.tmin_lane + first);
-    const VL zero = VL::broadcast(0.0f);
     const int count = blk.count();  // padding lanes repeat the first triangle
     for (int j = 0; j < count; ++j) {
       const VL az0 = VL::broadcast(rel[0][2][j]);
@@ -478,27 +477,9 @@ class PacketTracer {
       const VL by = fmadd(nsy, bz0, VL::broadcast(rel[1][1][j]));
       const VL cx = fmadd(nsx, cz0, VL::broadcast(rel[2][0][j]));
       const VL cy = fmadd(nsy, cz0, VL::broadcast(rel[2][1][j]));
-      VL u = cx * by - cy * bx;
-      VL v = ax * cy - ay * cx;
-      VL w = bx * ay - by * ax;
-      const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & active;
-      uint32_t mask;
-      if (zeros == 0) [[likely]] {
-        // As intersect_block: no edge function is 0, so the sign bits decide,
-        // and det cannot be 0.
-        mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & active;
-      } else {
-        recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
-        const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
-        const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
-        mask = ~(neg & pos) & active;
-      }
+      VL u, v, w, det;
+      uint32_t mask = watertight_edges<L>(ax, ay, bx, by, cx, cy, active, u, v, w, det);
       if (mask == 0) continue;
-      const VL det = u + v + w;
-      if (zeros != 0) {
-        mask &= cmp_neq(det, zero);
-        if (mask == 0) continue;
-      }
       const VL tt = sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
       const VL inv_det = VL::broadcast(1.0f) / det;
       const VL t = tt * inv_det;

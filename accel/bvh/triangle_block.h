@@ -94,8 +94,7 @@ struct BlockHits {
 
 // An edge function is exactly 0 in the lanes of `zeros`: recompute those
 // lanes' three edge functions in double precision, as the scalar test does.
-// Shared by the block test (a triangle per lane) and the packet test (a ray
-// per lane, traverse_packet.h).
+// Used by watertight_edges.
 template <int L>
 inline void recompute_edges_in_double(uint32_t zeros, simd::vfloat<L> ax, simd::vfloat<L> ay, simd::vfloat<L> bx,
                                       simd::vfloat<L> by, simd::vfloat<L> cx, simd::vfloat<L> cy,
@@ -111,6 +110,40 @@ inline void recompute_edges_in_double(uint32_t zeros, simd::vfloat<L> ax, simd::
     fw[i] = static_cast<float>(static_cast<double>(fbx[i]) * fay[i] - static_cast<double>(fby[i]) * fax[i]);
   }
   u = V::load(fu), v = V::load(fv), w = V::load(fw);
+}
+
+// The watertight test's edge functions u, v, w and det = u + v + w from the
+// sheared coordinates, L lanes at once (a triangle per lane in the block
+// test, a ray per lane in the packet test, traverse_packet.h). Returns the
+// lanes of `lanes` whose edge functions are not of mixed signs and whose det
+// is not 0 (a lane with a NaN edge function may pass, as in the scalar test,
+// and fails the caller's range test); u, v, w, det are set when that is not 0.
+template <int L>
+[[gnu::always_inline]] inline uint32_t watertight_edges(simd::vfloat<L> ax, simd::vfloat<L> ay, simd::vfloat<L> bx,
+                                                        simd::vfloat<L> by, simd::vfloat<L> cx, simd::vfloat<L> cy,
+                                                        uint32_t lanes, simd::vfloat<L>& u, simd::vfloat<L>& v,
+                                                        simd::vfloat<L>& w, simd::vfloat<L>& det) {
+  using V = simd::vfloat<L>;
+  u = cx * by - cy * bx;
+  v = ax * cy - ay * cx;
+  w = bx * ay - by * ax;
+  const V zero = V::broadcast(0.0f);
+  const uint32_t zeros = (cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero)) & lanes;
+  if (zeros == 0) [[likely]] {
+    // No edge function is 0, so "not of mixed signs" is "the same sign bit"
+    // (two xors instead of six comparisons). Terms of one sign, none 0,
+    // never sum to 0, so det != 0 needs no test here.
+    const uint32_t mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & lanes;
+    if (mask != 0) det = u + v + w;
+    return mask;
+  }
+  recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
+  const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
+  const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
+  uint32_t mask = ~(neg & pos) & lanes;
+  if (mask == 0) return 0;
+  det = u + v + w;
+  return mask & cmp_neq(det, zero);
 }
 
 // Tests all W lanes; returns the mask of lanes hit with tmin <= t <= tmax and
@@ -133,33 +166,11 @@ template <int W>
   const V cx = fmadd(r.nsx, cz0, V::load(p2 + r.off_x) - r.ox);
   const V cy = fmadd(r.nsy, cz0, V::load(p2 + r.off_y) - r.oy);
 
-  V u = cx * by - cy * bx;
-  V v = ax * cy - ay * cx;
-  V w = bx * ay - by * ax;
-  const V zero = V::broadcast(0.0f);
   constexpr uint32_t kAll = W == 32 ? ~0u : (1u << W) - 1u;
-  const uint32_t zeros = cmp_eq(u, zero) | cmp_eq(v, zero) | cmp_eq(w, zero);
-  uint32_t mask;
-  if (zeros == 0) [[likely]] {
-    // No edge function is 0, so "not of mixed signs" is "the same sign bit"
-    // (two xors instead of six comparisons); a NaN lane may pass either way
-    // and fails the range test. Terms of one sign, none 0, never sum to 0,
-    // so det != 0 needs no test here.
-    mask = ~(sign_bits(xor_bits(u, v)) | sign_bits(xor_bits(u, w))) & kAll;
-  } else {
-    recompute_edges_in_double(zeros, ax, ay, bx, by, cx, cy, u, v, w);
-    // Reject when the edge functions have mixed signs (a lane with a NaN edge
-    // function passes here, as in the scalar test, and fails the range test).
-    const uint32_t neg = cmp_lt(u, zero) | cmp_lt(v, zero) | cmp_lt(w, zero);
-    const uint32_t pos = cmp_gt(u, zero) | cmp_gt(v, zero) | cmp_gt(w, zero);
-    mask = ~(neg & pos) & kAll;
-  }
+  V u, v, w, det;
+  uint32_t mask = watertight_edges<W>(ax, ay, bx, by, cx, cy, kAll, u, v, w, det);
   if (mask == 0) return 0;
-  const V det = u + v + w;
-  if (zeros != 0) {  // only here can det be 0 (see above)
-    mask &= cmp_neq(det, zero);
-    if (mask == 0) return 0;
-  }
+  const V zero = V::broadcast(0.0f);
   const V tt = r.sz * fmadd(w, cz0, fmadd(v, bz0, u * az0));
   if (tmin >= 0.0f) {
     // Behind the origin without dividing: where tt and det have opposite
