@@ -1,5 +1,8 @@
 // Ray-triangle kernels: interior, edge and vertex hits; watertightness of a
 // closed sphere's shared edges and vertices.
+#include <cmath>
+#include <utility>
+
 #include <gtest/gtest.h>
 
 #include "accel/core/intersect_triangle.h"
@@ -56,6 +59,36 @@ TEST(WatertightTriangle, DegenerateTriangleIsNeverHit) {
   const WatertightRay w(Ray(Vec3f(0.5f, 0, 1), Vec3f(0, 0, -1)));
   EXPECT_FALSE(intersect_watertight(w, A, B, Vec3f(2, 0, 0), 0, 10, t, u, v));  // collinear
   EXPECT_FALSE(intersect_watertight(w, B, B, B, 0, 10, t, u, v));              // a point
+}
+
+// The ray frame of Woop et al.: kz the axis of the largest |d| (ties to the
+// lower axis), kx and ky the next ones cyclically, swapped when d[kz] < 0.
+// The constructor picks it from packed tables; every sign and tie pattern of
+// three components is checked against that definition, with the shear.
+TEST(WatertightTriangle, RayFrameIsTheDominantAxisWithWindingKept) {
+  const float mags[] = {0.0f, 0.5f, 1.0f, 2.0f};
+  int checked = 0;
+  for (float mx : mags)
+    for (float my : mags)
+      for (float mz : mags)
+        for (int signs = 0; signs < 8; ++signs) {
+          const Vec3f d((signs & 1) ? -mx : mx, (signs & 2) ? -my : my, (signs & 4) ? -mz : mz);
+          if (mx == 0.0f && my == 0.0f && mz == 0.0f) continue;
+          const WatertightRay w(Ray(Vec3f(1, 2, 3), d));
+          int kz = 0;
+          if (std::fabs(d[1]) > std::fabs(d[kz])) kz = 1;
+          if (std::fabs(d[2]) > std::fabs(d[kz])) kz = 2;
+          int kx = (kz + 1) % 3, ky = (kz + 2) % 3;
+          if (d[kz] < 0.0f) std::swap(kx, ky);
+          ASSERT_EQ(w.kz, kz) << d.transpose();
+          ASSERT_EQ(w.kx, kx) << d.transpose();
+          ASSERT_EQ(w.ky, ky) << d.transpose();
+          ASSERT_EQ(w.sz, 1.0f / d[kz]);
+          ASSERT_EQ(w.sx, d[kx] * (1.0f / d[kz]));
+          ASSERT_EQ(w.sy, d[ky] * (1.0f / d[kz]));
+          ++checked;
+        }
+  EXPECT_EQ(checked, 63 * 8);  // 4^3 - 1 non-zero magnitude triples, 8 sign patterns each (some are -0)
 }
 
 TEST(MollerTrumbore, AgreesWithWatertightInTheInterior) {
