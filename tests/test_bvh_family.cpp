@@ -506,6 +506,31 @@ TEST(BvhCollapse, WideLayoutNodesAndBlocks) {
   for (int c : seen) EXPECT_EQ(c, 1);
 }
 
+// Triangles that coincide (the same three vertices, as in real meshes with
+// doubled faces) have one centroid, so no object split separates them; a
+// spatial split cannot either (every plane puts all of them on both sides).
+// With single-triangle leaves (bleaf=1) such a node must still end in a
+// median split, not in spatial splits that copy every reference into both
+// children until the duplication budget is spent (it was: 1.5 references per
+// triangle, twice the memory, on sponza and dragon_in_sponza).
+TEST(BvhSbvh, CoincidentTrianglesDoNotSpendTheSplitBudget) {
+  test::NamedMesh s = test::soup(300, 47, 3.0f);
+  TriangleMesh dup;
+  dup.vertices = {Vec3f(0.1f, 0.2f, 0.3f), Vec3f(0.9f, 0.25f, 0.35f), Vec3f(0.4f, 0.8f, 0.3f)};
+  for (int i = 0; i < 12; ++i) dup.triangles.push_back({0, 1, 2});
+  s.mesh.append(dup);
+  const Prims p = prims_of(s.mesh);
+  SbvhOptions so;
+  so.base.leaf_threshold = 1;
+  so.alpha = 1.0f;  // spatial splits only where no object split exists
+  so.split_budget = 0.5f;
+  SbvhStats st;
+  const BinaryBvh t = build_sbvh(p.boxes, p.centroids, TriangleSplitter(s.mesh), so, &st);
+  check_binary_tree(t, s.mesh, true);
+  EXPECT_EQ(st.spatial_splits, 0u);
+  EXPECT_EQ(t.prim_ids.size(), s.mesh.num_triangles());
+}
+
 TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   // Long thin triangles across a box: the case spatial splits exist for.
   const test::NamedMesh s = test::soup(300, 47, 3.0f);

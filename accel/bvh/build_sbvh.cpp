@@ -364,10 +364,19 @@ class SbvhBuilder {
       if (budget_.fetch_sub(dup) >= dup) {
         partition_spatial(refs, spatial, dup, left, right);
         const int64_t used = static_cast<int64_t>(left.size() + right.size()) - static_cast<int64_t>(n);
-        budget_.fetch_add(dup - used);
-        done = !left.empty() && !right.empty();
-        if (done) spatial_splits_.fetch_add(1, std::memory_order_relaxed);
-        else {
+        // Where no object split exists (every centroid the same: coincident
+        // triangles), a spatial split that leaves every reference on both
+        // sides separates nothing, and the children would be split the same
+        // way until the budget is spent. Such nodes take the median split.
+        // (Elsewhere such a split still shrinks the references' boxes, which
+        // is what it is for: long triangles across a node.)
+        const bool separates = object.axis >= 0 || left.size() < n || right.size() < n;
+        done = !left.empty() && !right.empty() && separates;
+        if (done) {
+          budget_.fetch_add(dup - used);
+          spatial_splits_.fetch_add(1, std::memory_order_relaxed);
+        } else {
+          budget_.fetch_add(dup);
           left.clear();
           right.clear();
         }
