@@ -7,8 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <tuple>
@@ -862,6 +864,80 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
     EXPECT_TRUE(a->intersect1(Ray(Vec3f(4, 2, -1), Vec3f(0, 0, 1))).valid()) << spec << " on the box face";
     EXPECT_TRUE(a->intersect1(Ray(Vec3f(0, 0, -1), Vec3f(-0.0f, 0.0f, 1))).valid()) << spec << " corner, -0 dir";
   }
+}
+
+TEST(BvhTraversal, FastKernelTestIsTheScalarChecksTogether) {
+  // ray_takes_fma_kernel (three vector comparisons) against its definition,
+  // the scalar checks one by one, on every combination of awkward values in
+  // one origin, one direction component, tmin and tmax (the others ordinary).
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const float limit = 1000.0f;
+  const std::vector<float> org_values = {0.0f, -0.0f, 1.0f, -999.0f, limit, -limit, std::nextafter(limit, inf),
+                                         -2000.0f, FLT_MAX, inf, -inf, nan};
+  const std::vector<float> dir_values = {0.0f, -0.0f, 1e-31f, std::nextafter(1e-30f, 0.0f), 1e-30f, -1e-30f, 0.5f,
+                                         -3.0f, FLT_MAX, -FLT_MAX, inf, -inf, nan};
+  const std::vector<float> t_values = {0.0f, -0.0f, -1e-30f, 0.25f, 1e30f, FLT_MAX, inf, -inf, nan};
+  int fast = 0, slow = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float o : org_values)
+      for (float d : dir_values)
+        for (float t0 : t_values)
+          for (float t1 : t_values) {
+            Vec3f org(1.0f, -2.0f, 3.0f), dir(0.3f, -0.4f, 0.5f);
+            org[axis] = o;
+            dir[(axis + 1) % 3] = d;
+            const Ray r(org, dir, t0, t1);
+            // ray_is_valid (vector form with SSE4.1) against its rules (base/ray.h).
+            const bool valid = org.allFinite() && dir.allFinite() && dir != Vec3f::Zero() && t0 <= t1 && t0 < inf;
+            ASSERT_EQ(ray_is_valid(r), valid)
+                << "org " << org.transpose() << " dir " << dir.transpose() << " t " << t0 << " " << t1;
+            const bool expected =
+                ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f && !origin_beyond(r, limit);
+            ASSERT_EQ(ray_takes_fma_kernel(r, limit), expected)
+                << "org " << org.transpose() << " dir " << dir.transpose() << " t " << t0 << " " << t1;
+            (expected ? fast : slow)++;
+          }
+  EXPECT_GT(fast, 100);
+  EXPECT_GT(slow, 100);
+  for (const Vec3f& zero : {Vec3f(0, 0, 0), Vec3f(-0.0f, 0, -0.0f)}) {
+    EXPECT_FALSE(ray_is_valid(Ray(Vec3f(1, 2, 3), zero)));
+    EXPECT_FALSE(ray_takes_fma_kernel(Ray(Vec3f(1, 2, 3), zero), limit));
+  }
+  EXPECT_TRUE(ray_is_valid(Ray(Vec3f(1, 2, 3), Vec3f(0, 0, -1e-40f), -inf, -inf)));
+  // The origin limit of a scene is at most FLT_MAX (so an infinite origin
+  // never passes), 0 for a point.
+  EXPECT_EQ(wide_fma_origin_limit(Aabb(Vec3f(-FLT_MAX, 0, 0), Vec3f(FLT_MAX, 1, 1))), FLT_MAX);
+  EXPECT_EQ(wide_fma_origin_limit(Aabb(Vec3f(1, 1, 1), Vec3f(1, 1, 1))), 0.0f);
+  EXPECT_EQ(wide_fma_origin_limit(Aabb(Vec3f(0, 0, 0), Vec3f(2, 1, 1))), 128.0f);
+}
+
+TEST(BvhTraversal, FarPaddingOnTheBitsIsNeverBelowTheScaling) {
+  // The box test pads far distances by kSlabFarPadUlps on the bits, the
+  // proof of conservativeness is for the scaling by kSlabFarScale: the padded
+  // bits must reach at least the scaled value, for every float >= +0 (every
+  // 97th bit pattern from +0 to +inf, every one near powers of two).
+  auto bits = [](float x) {
+    int32_t i;
+    std::memcpy(&i, &x, 4);
+    return i;
+  };
+  auto check = [&](int32_t b) {
+    float t;
+    std::memcpy(&t, &b, 4);
+    ASSERT_LE(bits(t * kSlabFarScale), b + kSlabFarPadUlps) << t;
+  };
+  const int32_t inf_bits = 0x7F800000;
+  for (int64_t b = 0; b <= inf_bits; b += 97) check(static_cast<int32_t>(b));
+  for (int e = 1; e < 255; ++e)
+    for (int32_t k = -16; k <= 16; ++k) check((e << 23) + k);
+  check(inf_bits);
+  // The vector form adds the same.
+  using V = simd::vfloat<8>;
+  alignas(64) float in[8] = {0.0f, 1.0f, 1.5f, 2.0f - 0x1p-23f, FLT_MAX, 1e-40f, 3.0f, 1e30f}, out[8];
+  add_ulps(V::load(in), kSlabFarPadUlps).store(out);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(bits(out[i]), bits(in[i]) + kSlabFarPadUlps) << in[i];
+  EXPECT_EQ(cmp_le_bits(V::load(in), V::load(out)), 0xFFu);
+  EXPECT_EQ(cmp_le_bits(V::load(out), V::load(in)), 0x00u);
 }
 
 TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {

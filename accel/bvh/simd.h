@@ -151,6 +151,21 @@ struct vfloat {
     for (int i = 0; i < W; ++i) r.v[i] = signed_bits(a.v[i]) > signed_bits(b.v[i]) ? a.v[i] : b.v[i];
     return r;
   }
+  // The bits plus k as a signed integer (k units in the last place for a
+  // finite float >= +0), and a <= b in the signed-integer order of the bits.
+  friend vfloat add_ulps(const vfloat& a, int32_t k) {
+    vfloat r;
+    for (int i = 0; i < W; ++i) {
+      const int32_t x = static_cast<int32_t>(static_cast<uint32_t>(signed_bits(a.v[i])) + static_cast<uint32_t>(k));
+      std::memcpy(&r.v[i], &x, 4);
+    }
+    return r;
+  }
+  friend uint32_t cmp_le_bits(const vfloat& a, const vfloat& b) {
+    uint32_t m = 0;
+    for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(signed_bits(a.v[i]) <= signed_bits(b.v[i])) << i;
+    return m;
+  }
   // Bit i set when lane i's sign bit is set (NaN and -0 included).
   friend uint32_t sign_bits(const vfloat& a) {
     uint32_t m = 0;
@@ -255,6 +270,18 @@ struct vfloat<4> {
     return {_mm_castsi128_ps(_mm_or_si128(_mm_and_si128(gt, x), _mm_andnot_si128(gt, y)))};
   }
 #endif
+  friend vfloat add_ulps(vfloat a, int32_t k) {
+    return {_mm_castsi128_ps(_mm_add_epi32(_mm_castps_si128(a.v), _mm_set1_epi32(k)))};
+  }
+#if defined(RAYLAB_SIMD_AVX512)
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    return _mm_cmple_epi32_mask(_mm_castps_si128(a.v), _mm_castps_si128(b.v));
+  }
+#else
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    return 0xFu & ~static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))));
+  }
+#endif
 #if defined(RAYLAB_SIMD_AVX512)
   RAYLAB_VF_MASK_COMPARE(_mm)
 #else
@@ -278,9 +305,35 @@ struct vfloat<8> {
   RAYLAB_VF_MIN_MAX(_mm256)
 #if defined(__AVX2__)
   RAYLAB_VF_INTEGER_MIN_MAX(_mm256, 256)
+  friend vfloat add_ulps(vfloat a, int32_t k) {
+    return {_mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(a.v), _mm256_set1_epi32(k)))};
+  }
+#if defined(RAYLAB_SIMD_AVX512)
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    return _mm256_cmple_epi32_mask(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v));
+  }
+#else
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    const __m256i gt = _mm256_cmpgt_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v));
+    return 0xFFu & ~static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(gt)));
+  }
+#endif
 #else
   friend vfloat min_bits(vfloat a, vfloat b) { return min(a, b); }
   friend vfloat max_bits(vfloat a, vfloat b) { return max(a, b); }
+  // AVX without AVX2: the integer forms on the two 128-bit halves.
+  friend vfloat add_ulps(vfloat a, int32_t k) {
+    const __m128i lo = _mm_add_epi32(_mm_castps_si128(_mm256_castps256_ps128(a.v)), _mm_set1_epi32(k));
+    const __m128i hi = _mm_add_epi32(_mm_castps_si128(_mm256_extractf128_ps(a.v, 1)), _mm_set1_epi32(k));
+    return {_mm256_insertf128_ps(_mm256_castps128_ps256(_mm_castsi128_ps(lo)), _mm_castsi128_ps(hi), 1)};
+  }
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    const __m128i gl = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_castps256_ps128(a.v)), _mm_castps_si128(_mm256_castps256_ps128(b.v)));
+    const __m128i gh = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_extractf128_ps(a.v, 1)), _mm_castps_si128(_mm256_extractf128_ps(b.v, 1)));
+    const uint32_t gt = static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gl))) |
+                        static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gh))) << 4;
+    return 0xFFu & ~gt;
+  }
 #endif
 #if defined(RAYLAB_SIMD_AVX512)
   RAYLAB_VF_MASK_COMPARE(_mm256)
@@ -317,6 +370,12 @@ struct vfloat<16> {
   }
   friend vfloat max_bits(vfloat a, vfloat b) {
     return {_mm512_castsi512_ps(_mm512_maskz_max_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_castps_si512(b.v)))};
+  }
+  friend vfloat add_ulps(vfloat a, int32_t k) {
+    return {_mm512_castsi512_ps(_mm512_maskz_add_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_set1_epi32(k)))};
+  }
+  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
+    return _mm512_cmple_epi32_mask(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v));
   }
   RAYLAB_VF_MASK_COMPARE(_mm512)
   friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }

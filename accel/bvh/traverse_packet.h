@@ -279,8 +279,10 @@ inline uint32_t frustum_children(const WideNode<8>& node, const PacketFrustum& f
   }
   // Integer-order min/max as in intersect_children (tmin >= +0).
   tnear = max_bits(max_bits(lo[0], lo[1]), max_bits(lo[2], f.tmin));
-  const V8 tfar = min_bits(min_bits(hi[0], hi[1]), min_bits(hi[2], tmax_hi)) * V8::broadcast(kSlabFarScale);
-  return cmp_le(tnear, tfar);
+  // The far padding on the bits (kSlabFarPadUlps) is monotonic in the
+  // integer order, so the frustum's padded far bound stays above every ray's.
+  const V8 tfar = add_ulps(min_bits(min_bits(hi[0], hi[1]), min_bits(hi[2], tmax_hi)), kSlabFarPadUlps);
+  return cmp_le_bits(tnear, tfar);
 }
 
 // The rays whose own box test (the single-ray FMA slab test, lane by lane)
@@ -294,8 +296,8 @@ inline uint32_t rays_entering(const WideNode<8>& node, uint32_t slot, const Pack
     far[a] = fmadd(V::broadcast(node.bounds[pr.far_row[a]][slot]), pr.inv[a], pr.far_shift[a]);
   }
   const V tnear = max_bits(max_bits(near[0], near[1]), max_bits(near[2], pr.tmin));
-  const V tfar = min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)) * V::broadcast(kSlabFarScale);
-  return cmp_le(tnear, tfar);
+  const V tfar = add_ulps(min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)), kSlabFarPadUlps);
+  return cmp_le_bits(tnear, tfar);
 }
 
 template <int W>

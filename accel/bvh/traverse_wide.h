@@ -13,7 +13,11 @@
 // multiply form of Ize ("Robust BVH Ray Traversal", JCGT 2013), whose far
 // scaling by 1 + 2*gamma(3) therefore still guarantees that no box the ray
 // really crosses is missed. The reductions use integer min/max on the float
-// bits (valid for tmin >= 0, see intersect_children). Rays with a (nearly)
+// bits (valid for tmin >= 0, see intersect_children), and the far padding is
+// applied on the bits too: 6 ulps added as an integer, never less than the
+// scaling (kSlabFarPadUlps, slab_test.h), and the hit mask an integer
+// comparison, so no float operation sits between the planes' FMAs and the
+// mask. Rays with a (nearly)
 // zero direction component or a negative tmin take the exact kernel: Ize's
 // form with exact reciprocals and NaN-ignoring min/max. Without FMA every ray
 // takes that form.
@@ -30,7 +34,9 @@
 // tests instead of delaying the first leaf test: shadow rays leave after a
 // few nodes, and this measured 1.5-3 % faster on them (2026-11-27), while
 // closest hit lost 2-4 % with it (more state live through the node loop).
+#include <algorithm>
 #include <cfloat>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -80,7 +86,8 @@ inline float wide_fma_origin_limit(const Aabb& root_box) {
   if (root_box.is_empty()) return FLT_MAX;
   const Vec3f extent = root_box.hi - root_box.lo;
   const float side = std::max(extent.x(), std::max(extent.y(), extent.z()));
-  return side > 0.0f ? 64.0f * side : 0.0f;
+  // At most FLT_MAX, so that an origin within the limit is finite (ray_takes_fma_kernel).
+  return side > 0.0f ? std::min(64.0f * side, FLT_MAX) : 0.0f;
 }
 
 inline bool origin_beyond(const Ray& r, float limit) {
@@ -109,14 +116,46 @@ inline bool ray_is_axis_parallel(const Ray& r) {
   return std::fabs(r.dir.x()) < kTiny || std::fabs(r.dir.y()) < kTiny || std::fabs(r.dir.z()) < kTiny;
 }
 
+// True when a ray may take the FMA kernel: every direction component at
+// least 1e-30 and finite (so not axis-parallel, see ray_is_axis_parallel, and
+// not zero), every origin component within `limit` (at most FLT_MAX, so
+// finite; origin_beyond), 0 <= tmin <= tmax and tmin finite. That is
+// ray_is_valid && !ray_is_axis_parallel && tmin >= 0 && !origin_beyond, with
+// NaN failing every comparison. It is the prologue of every ray, so with AVX
+// it is three vector comparisons on the ray's two halves and one branch
+// instead of a dozen scalar ones: on rays that leave the scene after one
+// node, the scalar checks were about a quarter of the time (docs/bvh-speed.md,
+// session 12). Rays that fail it take the checks one by one.
+inline bool ray_takes_fma_kernel(const Ray& r, float limit) {
+#if defined(__AVX__)
+  static_assert(offsetof(Ray, tmin) == offsetof(Ray, org) + 12 && offsetof(Ray, tmax) == offsetof(Ray, dir) + 12 &&
+                offsetof(Ray, dir) == offsetof(Ray, org) + 16, "Ray: org, tmin, dir, tmax packed in this order");
+  const __m128 o_t0 = _mm_loadu_ps(r.org.data());  // ox oy oz tmin
+  const __m128 d_t1 = _mm_loadu_ps(r.dir.data());  // dx dy dz tmax
+  const __m128 abs_xyz = _mm_castsi128_ps(_mm_setr_epi32(0x7FFFFFFF, 0x7FFFFFFF, 0x7FFFFFFF, -1));
+  // |ox| |oy| |oz| tmin <= limit limit limit tmax
+  const __m128 a = _mm_and_ps(o_t0, abs_xyz);
+  const __m128 ok_a = _mm_cmp_ps(a, _mm_blend_ps(_mm_set1_ps(limit), d_t1, 8), _CMP_LE_OQ);
+  // |dx| |dy| |dz| tmin >= 1e-30 1e-30 1e-30 0, and <= FLT_MAX
+  const __m128 b = _mm_blend_ps(_mm_and_ps(d_t1, abs_xyz), o_t0, 8);
+  const __m128 ok_lo = _mm_cmp_ps(b, _mm_setr_ps(1e-30f, 1e-30f, 1e-30f, 0.0f), _CMP_GE_OQ);
+  const __m128 ok_hi = _mm_cmp_ps(b, _mm_set1_ps(FLT_MAX), _CMP_LE_OQ);
+  return _mm_movemask_ps(_mm_and_ps(_mm_and_ps(ok_a, ok_lo), ok_hi)) == 0xF;
+#else
+  return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f && !origin_beyond(r, limit);
+#endif
+}
+
 // Per-ray constants of the box test: the reciprocals of the slab test (as
 // SlabRay: safe reciprocals, or exact ones for axis_parallel rays, see
 // ray_is_axis_parallel) and the bounds of o * inv. Division is correctly
 // rounded in vector or scalar form, so the values are the scalar code's.
 // Built without branches when AVX is available: setup is a large share of a
 // short ray's cost. (The triangle test's constants: see the top of this file.)
+// inv_out (optional, 4 floats): the scalar reciprocals, for the triangle test's set-up.
 template <int N>
-[[gnu::always_inline]] inline void init_node_ray(WideNodeRay<N>& node, const Ray& r, bool axis_parallel) {
+[[gnu::always_inline]] inline void init_node_ray(WideNodeRay<N>& node, const Ray& r, bool axis_parallel,
+                                                 float* inv_out = nullptr) {
   float inv[3], shift_up[3], shift_down[3];
 #if defined(__AVX__)
   const __m128 d = _mm_setr_ps(r.dir.x(), r.dir.y(), r.dir.z(), 1.0f);
@@ -136,6 +175,7 @@ template <int N>
   const __m128 down = _mm_min_ps(_mm_sub_ps(oi, delta), _mm_set1_ps(FLT_MAX));
   alignas(16) float invv[4], upv[4], downv[4];
   _mm_store_ps(invv, inv4);
+  if (inv_out) _mm_storeu_ps(inv_out, inv4);
   // Exact reciprocals of components below 2^-128 overflow: NaN, as SlabRay.
   if (axis_parallel)
     for (int a = 0; a < 3; ++a) invv[a] = safe_slab_reciprocal(r.dir[a]);
@@ -204,8 +244,8 @@ template <int N, bool kExact>
     // the box exactly as the true minimum would. The FMA form never yields
     // -0 for a far plane (the shift is at least FLT_MIN away from o * inv).
     tnear = max_bits(max_bits(nx, ny), max_bits(nz, tmin));
-    const V tfar = min_bits(min_bits(fx, fy), min_bits(fz, tmax)) * V::broadcast(kSlabFarScale);
-    return cmp_le(tnear, tfar);
+    const V tfar = add_ulps(min_bits(min_bits(fx, fy), min_bits(fz, tmax)), kSlabFarPadUlps);
+    return cmp_le_bits(tnear, tfar);
   }
 #endif
   const V nx = (V::load(b + r.near_off[0]) - r.org[0]) * r.inv[0];
@@ -288,7 +328,8 @@ RAYLAB_NO_VECTORIZE inline uint32_t intersect_children_scalar(const WideNode<N>&
         f[a] = std::fma(b[r.far_off[a] + i], r.inv[a], r.far_shift[a]);
       }
       tnear[i] = max_bits(max_bits(n[0], n[1]), max_bits(n[2], tmin));
-      hit = tnear[i] <= min_bits(min_bits(f[0], f[1]), min_bits(f[2], tmax)) * kSlabFarScale;
+      const float tfar = min_bits(min_bits(f[0], f[1]), min_bits(f[2], tmax));
+      hit = bits_of(tnear[i]) <= static_cast<int32_t>(static_cast<uint32_t>(bits_of(tfar)) + kSlabFarPadUlps);
       mask |= static_cast<uint32_t>(hit) << i;
       continue;
     }
@@ -451,7 +492,16 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
-  init_node_ray(nr, ray, kAxisParallel);
+  // The FMA kernel's rays have no direction component below 1e-30, so the box
+  // test's reciprocals are the correctly rounded 1 / dir: the triangle test's
+  // set-up takes its 1 / dir[kz] from them instead of dividing again.
+#if defined(__AVX__)
+  constexpr bool kShareReciprocal = !kAxisParallel;
+#else
+  constexpr bool kShareReciprocal = false;
+#endif
+  alignas(16) float ray_inv[4];
+  init_node_ray(nr, ray, kAxisParallel, kShareReciprocal ? ray_inv : nullptr);
   [[maybe_unused]] const ScalarNodeRay snr = [&] {
     if constexpr (kScalar) return ScalarNodeRay(nr);
     else return ScalarNodeRay{};
@@ -460,7 +510,7 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
   LeafRay br{};  // closest hit: filled at the first leaf; any hit: here (see above)
   const auto init_leaf_ray = [&] {
     if constexpr (kTest == TriangleTest::MollerTrumbore) br.init(ray);
-    else br.init(WatertightRay(ray));
+    else br.init(WatertightRay(ray, kShareReciprocal ? ray_inv : nullptr));
   };
   if constexpr (!kScalar && kAnyHit) init_leaf_ray();
   // The scalar leaf test's constants (kScalar only; the default ray's otherwise, unused).
@@ -549,13 +599,13 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
 // kind. kScalar: the scalar tests of `bvh:simd=0`; kTest: see walk_wide.
 template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight>
 inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
-  if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
   // The fast kernel needs finite reciprocals, tmin >= 0 (see
   // intersect_children) and an origin not far beyond the scene
-  // (wide_fma_origin_limit); everything else takes the exact form.
-  if (ray_is_axis_parallel(ray) || !(ray.tmin >= 0.0f) || origin_beyond(ray, bvh.fma_origin_limit)) [[unlikely]]
-    return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar, kTest>(bvh, ray, stats);
-  return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar, kTest>(bvh, ray, stats);
+  // (wide_fma_origin_limit): one test for all of it and validity.
+  if (ray_takes_fma_kernel(ray, bvh.fma_origin_limit)) [[likely]]
+    return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar, kTest>(bvh, ray, stats);
+  if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
+  return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar, kTest>(bvh, ray, stats);
 }
 
 }  // namespace raylab

@@ -40,7 +40,12 @@ struct WatertightRay {
   float sx = 0.0f, sy = 0.0f, sz = 1.0f;
 
   WatertightRay() = default;
-  explicit WatertightRay(const Ray& r) : org(r.org) {
+  explicit WatertightRay(const Ray& r) : WatertightRay(r, nullptr) {}
+  // inv: the ray's correctly rounded reciprocals 1 / dir (as the wide BVH's
+  // box test already divided them out), or null to divide here. The same
+  // value either way: the division is one of the longest operations in a
+  // short ray's set-up, and it is already done.
+  WatertightRay(const Ray& r, const float* inv) : org(r.org) {
     // kz is the dominant axis; (kx, ky) follow it cyclically and swap when the
     // ray looks down -kz, which keeps the projected triangle's winding. Chosen
     // from packed tables, without branches: on incoherent rays the direction's
@@ -60,7 +65,7 @@ struct WatertightRay {
     ky = static_cast<int>((0x186u >> (2 * k)) & 3u);
     // One division: the shear only has to be the same for every triangle a
     // ray meets, not the correctly rounded quotient.
-    sz = 1.0f / dz;
+    sz = inv ? inv[kz] : 1.0f / dz;
     sx = r.dir[kx] * sz;
     sy = r.dir[ky] * sz;
   }

@@ -24,6 +24,7 @@
 // cell trees, whose boxes lie in cells, lost hits that way.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "base/aabb.h"
@@ -34,6 +35,17 @@ namespace raylab {
 inline constexpr float kFloatGamma3 = (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
 inline constexpr float kSlabFarScale = 1.0f + 2.0f * kFloatGamma3;
 inline constexpr float kSlabFarScaleNeg = 1.0f - 2.0f * kFloatGamma3;
+
+// The same padding on the bits, for finite or infinite t >= +0: t's bits plus
+// kSlabFarPadUlps, compared in the signed-integer order of the bits. With
+// kSlabFarScale = 1 + 3 * 2^-23 (as rounded), t * kSlabFarScale is below
+// t + 6 ulp(t) before rounding (t's significand is below 2), so rounded it is
+// at most the float 6 steps above t (steps only grow across a power of two):
+// this padding accepts every box the multiplication accepts. An integer add
+// instead of a multiplication between a node's planes and its hit mask, and
+// no float operation after the integer min/max (see traverse_wide.h).
+inline constexpr int32_t kSlabFarPadUlps = 6;
+static_assert(kSlabFarScale == 1.0f + 3.0f * 0x1p-23f, "kSlabFarPadUlps assumes this padding");
 
 // A far distance padded outward: up when positive, towards zero when negative.
 inline float pad_far(float t) { return t * (t >= 0.0f ? kSlabFarScale : kSlabFarScaleNeg); }
