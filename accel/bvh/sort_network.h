@@ -14,8 +14,10 @@
 // Each layer is one permute, a min, a max and a blend.
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 
 #include "accel/bvh/simd.h"
+#include "accel/core/slab_test.h"
 
 namespace raylab {
 
@@ -36,6 +38,17 @@ inline float key_dist(uint64_t key) {
   return d;
 }
 inline uint32_t key_ref(uint64_t key) { return static_cast<uint32_t>(key) ^ kKeyRefFlip; }
+
+// The greatest key whose entry distance is within tmax padded as the box
+// test pads far distances (kSlabFarPadUlps on the bits; nothing beyond +0
+// for a negative tmax): a popped key above it cannot hold a hit closer than
+// tmax, and one integer comparison of the whole key says so.
+inline uint64_t key_cull_limit(float tmax) {
+  uint32_t bits;
+  std::memcpy(&bits, &tmax, sizeof bits);
+  const uint32_t limit = tmax >= 0.0f ? bits + static_cast<uint32_t>(kSlabFarPadUlps) : 0u;
+  return static_cast<uint64_t>(limit) << 32 | 0xFFFFFFFFu;
+}
 
 // Sorts keys[0, n) descending (insertion sort; the portable fallback).
 inline void sort_keys_descending(uint64_t* keys, int n) {

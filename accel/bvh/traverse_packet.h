@@ -379,8 +379,8 @@ class PacketTracer {
         if (!have_next) {
           // Next entry some ray can still enter before its closest hit (the
           // single-ray walk culls the same way, see walk_wide's pop).
-          const float limit = tmax_hi * kSlabFarScale;
-          while (sp > 0 && key_dist(stack[sp - 1]) > limit) --sp;
+          const uint64_t limit = key_cull_limit(tmax_hi);
+          while (sp > 0 && stack[sp - 1] > limit) --sp;
           if (sp == 0) return;
           next = key_ref(stack[--sp]);
         }

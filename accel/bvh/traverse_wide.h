@@ -527,16 +527,22 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
   int sp = 0;
   uint32_t cur = start;
 
+  // Closest hit: entries whose entry distance exceeds the current bound,
+  // padded as the box test pads it (kSlabFarPadUlps on the bits), are culled
+  // when popped. Keys hold the distance's bits in their high half, so that
+  // is one integer comparison of the whole key against cull_key, which
+  // changes only when a hit is kept. Keys clamp negative entry distances
+  // (tmin < 0) to 0: with a hit at t < 0 only the subtrees entered at t > 0
+  // can be culled here (the others are culled, exactly, by the box test when
+  // visited).
+  [[maybe_unused]] uint64_t cull_key = kAnyHit ? 0 : key_cull_limit(rec.tmax());
+
   // Next subtree from the stack that can still hold a closer hit.
   auto pop = [&]() -> bool {
     while (sp > 0) {
       const uint64_t e = stack[--sp];
       if constexpr (!kAnyHit) {
-        // Keys clamp negative entry distances (tmin < 0) to 0: with a hit at
-        // t < 0 only the subtrees entered at t > 0 can be culled here (the
-        // others are culled, exactly, by the box test when visited).
-        const float tmax = rec.tmax();
-        if (key_dist(e) > (tmax >= 0.0f ? tmax * kSlabFarScale : 0.0f)) continue;
+        if (e > cull_key) continue;
       }
       cur = key_ref(e);
       return true;
@@ -583,6 +589,7 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
                               : intersect_block_leaf<W>(blocks, wide_ref::leaf_blocks(cur), br, tmin, rec);
     if (kept) {
       if constexpr (kAnyHit) return;
+      else cull_key = key_cull_limit(rec.tmax());
     }
     if (!pop()) return;
   }
