@@ -187,6 +187,7 @@ template <int N>
   // Exact reciprocals for every ray (SlabRay): what axis-parallel rays need,
   // and without AVX there is no FMA kernel that would want the clamped ones.
   (void)axis_parallel;
+  (void)inv_out;  // the triangle set-up divides for itself (kShareReciprocal)
   const SlabRay sr(r);
   int neg_mask = 0;
   for (int a = 0; a < 3; ++a) {
