@@ -30,6 +30,28 @@ struct Ray {
   Vec3f at(float t) const { return org + t * dir; }
 };
 
+#if defined(__SSE4_1__)
+// The operands of the ray checks (ray_is_valid here, the wide BVH's
+// ray_takes_fma_kernel): the ray's two 16-byte halves, (org, tmin) and (dir,
+// tmax), with magnitudes in the first three lanes and tmin in the last.
+struct RayLanes {
+  __m128 abs_org_tmin;  // |ox| |oy| |oz| tmin
+  __m128 abs_dir_tmin;  // |dx| |dy| |dz| tmin
+  __m128 dir_tmax;      // dx dy dz tmax
+  explicit RayLanes(const Ray& r) {
+    static_assert(offsetof(Ray, tmin) == offsetof(Ray, org) + 12 && offsetof(Ray, dir) == offsetof(Ray, org) + 16 &&
+                  offsetof(Ray, tmax) == offsetof(Ray, dir) + 12, "Ray: org, tmin, dir, tmax packed in this order");
+    const __m128 org_tmin = _mm_loadu_ps(r.org.data());
+    dir_tmax = _mm_loadu_ps(r.dir.data());
+    const __m128 abs_xyz = _mm_castsi128_ps(_mm_setr_epi32(0x7FFFFFFF, 0x7FFFFFFF, 0x7FFFFFFF, -1));
+    abs_org_tmin = _mm_and_ps(org_tmin, abs_xyz);
+    abs_dir_tmin = _mm_blend_ps(_mm_and_ps(dir_tmax, abs_xyz), org_tmin, 8);
+  }
+  // All four lanes set.
+  static bool all(__m128 m) { return _mm_movemask_ps(m) == 0xF; }
+};
+#endif
+
 // True when a ray can be traced: finite origin, finite non-zero direction,
 // tmin and tmax not NaN, tmin <= tmax, and tmin < +inf (a segment that starts
 // at infinity is empty; without this rule [+inf, +inf] would accept exactly
@@ -43,21 +65,16 @@ struct Ray {
 // cameras, whose views are checked (view_problem) before any ray is made.
 inline bool ray_is_valid(const Ray& r) {
 #if defined(__SSE4_1__)
-  // The same rules as the scalar form below, as three comparisons on the
-  // ray's two halves (org, tmin) and (dir, tmax): every traversal's prologue.
-  static_assert(offsetof(Ray, tmin) == offsetof(Ray, org) + 12 && offsetof(Ray, dir) == offsetof(Ray, org) + 16 &&
-                offsetof(Ray, tmax) == offsetof(Ray, dir) + 12, "Ray: org, tmin, dir, tmax packed in this order");
-  const __m128 o_t0 = _mm_loadu_ps(r.org.data());  // ox oy oz tmin
-  const __m128 d_t1 = _mm_loadu_ps(r.dir.data());  // dx dy dz tmax
-  const __m128 abs_xyz = _mm_castsi128_ps(_mm_setr_epi32(0x7FFFFFFF, 0x7FFFFFFF, 0x7FFFFFFF, -1));
+  // The same rules as the scalar form below, as three comparisons: every
+  // traversal's prologue.
+  const RayLanes l(r);
   const __m128 flt_max = _mm_set1_ps(std::numeric_limits<float>::max());
   // |ox| |oy| |oz| <= FLT_MAX (finite), tmin <= tmax
-  const __m128 ok_org = _mm_cmple_ps(_mm_and_ps(o_t0, abs_xyz), _mm_blend_ps(flt_max, d_t1, 8));
+  const __m128 ok_org = _mm_cmple_ps(l.abs_org_tmin, _mm_blend_ps(flt_max, l.dir_tmax, 8));
   // |dx| |dy| |dz| <= FLT_MAX (finite), tmin <= FLT_MAX (below +inf)
-  const __m128 abs_dir = _mm_and_ps(d_t1, abs_xyz);
-  const __m128 ok_dir = _mm_cmple_ps(_mm_blend_ps(abs_dir, o_t0, 8), flt_max);
-  const int nonzero = _mm_movemask_ps(_mm_cmpgt_ps(abs_dir, _mm_setzero_ps())) & 7;
-  return (_mm_movemask_ps(_mm_and_ps(ok_org, ok_dir)) == 0xF) & (nonzero != 0);
+  const __m128 ok_dir = _mm_cmple_ps(l.abs_dir_tmin, flt_max);
+  const int nonzero = _mm_movemask_ps(_mm_cmpgt_ps(l.abs_dir_tmin, _mm_setzero_ps())) & 7;
+  return RayLanes::all(_mm_and_ps(ok_org, ok_dir)) & (nonzero != 0);
 #else
   bool finite = true, nonzero = false;
   for (int a = 0; a < 3; ++a) {

@@ -121,26 +121,20 @@ inline bool ray_is_axis_parallel(const Ray& r) {
 // not zero), every origin component within `limit` (at most FLT_MAX, so
 // finite; origin_beyond), 0 <= tmin <= tmax and tmin finite. That is
 // ray_is_valid && !ray_is_axis_parallel && tmin >= 0 && !origin_beyond, with
-// NaN failing every comparison. It is the prologue of every ray, so with AVX
+// NaN failing every comparison. It is the prologue of every ray, so with SSE4.1
 // it is three vector comparisons on the ray's two halves and one branch
 // instead of a dozen scalar ones: on rays that leave the scene after one
 // node, the scalar checks were about a quarter of the time (docs/bvh-speed.md,
 // session 12). Rays that fail it take the checks one by one.
 inline bool ray_takes_fma_kernel(const Ray& r, float limit) {
-#if defined(__AVX__)
-  static_assert(offsetof(Ray, tmin) == offsetof(Ray, org) + 12 && offsetof(Ray, tmax) == offsetof(Ray, dir) + 12 &&
-                offsetof(Ray, dir) == offsetof(Ray, org) + 16, "Ray: org, tmin, dir, tmax packed in this order");
-  const __m128 o_t0 = _mm_loadu_ps(r.org.data());  // ox oy oz tmin
-  const __m128 d_t1 = _mm_loadu_ps(r.dir.data());  // dx dy dz tmax
-  const __m128 abs_xyz = _mm_castsi128_ps(_mm_setr_epi32(0x7FFFFFFF, 0x7FFFFFFF, 0x7FFFFFFF, -1));
+#if defined(__SSE4_1__)
+  const RayLanes l(r);
   // |ox| |oy| |oz| tmin <= limit limit limit tmax
-  const __m128 a = _mm_and_ps(o_t0, abs_xyz);
-  const __m128 ok_a = _mm_cmp_ps(a, _mm_blend_ps(_mm_set1_ps(limit), d_t1, 8), _CMP_LE_OQ);
+  const __m128 ok_org = _mm_cmple_ps(l.abs_org_tmin, _mm_blend_ps(_mm_set1_ps(limit), l.dir_tmax, 8));
   // |dx| |dy| |dz| tmin >= 1e-30 1e-30 1e-30 0, and <= FLT_MAX
-  const __m128 b = _mm_blend_ps(_mm_and_ps(d_t1, abs_xyz), o_t0, 8);
-  const __m128 ok_lo = _mm_cmp_ps(b, _mm_setr_ps(1e-30f, 1e-30f, 1e-30f, 0.0f), _CMP_GE_OQ);
-  const __m128 ok_hi = _mm_cmp_ps(b, _mm_set1_ps(FLT_MAX), _CMP_LE_OQ);
-  return _mm_movemask_ps(_mm_and_ps(_mm_and_ps(ok_a, ok_lo), ok_hi)) == 0xF;
+  const __m128 ok_lo = _mm_cmpge_ps(l.abs_dir_tmin, _mm_setr_ps(1e-30f, 1e-30f, 1e-30f, 0.0f));
+  const __m128 ok_hi = _mm_cmple_ps(l.abs_dir_tmin, _mm_set1_ps(FLT_MAX));
+  return RayLanes::all(_mm_and_ps(_mm_and_ps(ok_org, ok_lo), ok_hi));
 #else
   return ray_is_valid(r) && !ray_is_axis_parallel(r) && r.tmin >= 0.0f && !origin_beyond(r, limit);
 #endif
