@@ -80,6 +80,17 @@ namespace network_detail {
 }
 
 // All 8 lanes sorted descending.
+// The least of the keys in `mask` (at least one lane): three halving steps
+// with immediate shuffles. GCC's _mm512_mask_reduce_min_epu64 would do, but
+// its helpers start from undefined registers (GCC 12: -Wmaybe-uninitialized).
+[[gnu::always_inline]] inline uint64_t min_key(__m512i keys, __mmask8 mask) {
+  __m512i v = _mm512_mask_blend_epi64(mask, _mm512_set1_epi64(-1), keys);
+  v = _mm512_maskz_min_epu64(0xFF, v, _mm512_maskz_shuffle_i64x2(0xFF, v, v, _MM_SHUFFLE(1, 0, 3, 2)));
+  v = _mm512_maskz_min_epu64(0xFF, v, _mm512_maskz_permutex_epi64(0xFF, v, _MM_SHUFFLE(1, 0, 3, 2)));
+  v = _mm512_maskz_min_epu64(0xFF, v, _mm512_maskz_shuffle_epi32(0xFFFF, v, _MM_PERM_BADC));
+  return static_cast<uint64_t>(v[0]);  // a vector subscript (GCC, Clang): _mm512_castsi512_si128 warns as above
+}
+
 [[gnu::always_inline]] inline __m512i sort8_descending(__m512i v) {
   using network_detail::layer;
   v = sort4x2_descending(v);
