@@ -14,6 +14,7 @@
 #include <map>
 #include <numeric>
 #include <tuple>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -834,6 +835,31 @@ TEST(BvhTraversal, SortingNetworkSortsDescending) {
   EXPECT_EQ(key_dist(child_key(-2.0f, 12)), 0.0f) << "negative distances order as 0";
 }
 
+#if defined(RAYLAB_SIMD_AVX512)
+TEST(BvhTraversal, MinKeyIsTheLeastKeyInTheMask) {
+  // The closest-hit walk takes its next node from min_key, beside the
+  // sorting network: it must be the least key among the mask's lanes, for
+  // every non-empty mask, whatever the other lanes hold (keys near 0 and
+  // near the maximum included).
+  Pcg32 rng(7, 3);
+  for (int round = 0; round < 200; ++round) {
+    alignas(64) uint64_t keys[8];
+    for (int i = 0; i < 8; ++i) {
+      const uint32_t kind = rng.next() % 4;
+      keys[i] = kind == 0 ? rng.next() : kind == 1 ? ~uint64_t{0} - rng.next() % 4
+                                                     : child_key(rng.uniform() * 10.0f, rng.next());
+    }
+    const __m512i v = _mm512_load_si512(keys);
+    for (uint32_t mask = 1; mask < 256; ++mask) {
+      uint64_t want = ~uint64_t{0};
+      for (int i = 0; i < 8; ++i)
+        if ((mask >> i) & 1) want = std::min(want, keys[i]);
+      ASSERT_EQ(min_key(v, static_cast<__mmask8>(mask)), want) << mask;
+    }
+  }
+}
+#endif
+
 TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
   // Axis-aligned slabs of triangles; rays start inside the scene, on box
   // faces and parallel to faces (zero direction components).
@@ -938,6 +964,51 @@ TEST(BvhTraversal, FarPaddingOnTheBitsIsNeverBelowTheScaling) {
   for (int i = 0; i < 8; ++i) EXPECT_EQ(bits(out[i]), bits(in[i]) + kSlabFarPadUlps) << in[i];
   EXPECT_EQ(cmp_le_bits(V::load(in), V::load(out)), 0xFFu);
   EXPECT_EQ(cmp_le_bits(V::load(out), V::load(in)), 0x00u);
+}
+
+TEST(BvhTraversal, PaddedSlabMaskIsTheLessOrEqualOfThePaddedFar) {
+  // padded_slab_mask computes tnear <= tfar + kSlabFarPadUlps as tnear <
+  // tfar + kSlabFarPadUlps + 1 (one comparison, no complement): the same
+  // mask for every pair of entry distances (>= +0, as the kernels' are) and
+  // far distances of every kind the FMA kernels produce (negative, -0, +0,
+  // denormal, at and around the padding, FLT_MAX, +inf), at widths 4, 8, 16.
+  auto from_bits = [](int32_t b) {
+    float f;
+    std::memcpy(&f, &b, 4);
+    return f;
+  };
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> fars = {-inf, -FLT_MAX, -1.0f, -1e-40f, -0.0f, 0.0f, 1e-45f, 1e-40f, 1.0f, FLT_MAX, inf};
+  std::vector<float> nears = {0.0f, 1e-45f, 1e-40f, 1.0f, FLT_MAX, inf};
+  for (float x : {0.0f, 1.0f, 3.5f, 1e30f, FLT_MAX})
+    for (int32_t k = -8; k <= 8; ++k) {
+      int32_t b;
+      std::memcpy(&b, &x, 4);
+      if (b + k < 0) continue;
+      fars.push_back(from_bits(b + k));
+      nears.push_back(from_bits(b + k));
+    }
+  auto check = [&](auto width) {
+    constexpr int W = decltype(width)::value;
+    using V = simd::vfloat<W>;
+    alignas(64) float n[W], f[W];
+    size_t lane = 0, tested = 0;
+    for (float tn : nears)
+      for (float tf : fars) {
+        n[lane] = tn, f[lane] = tf;
+        if (++lane < W) continue;
+        lane = 0;
+        const uint32_t expect = cmp_le_bits(V::load(n), add_ulps(V::load(f), kSlabFarPadUlps));
+        ASSERT_EQ(padded_slab_mask(V::load(n), V::load(f)), expect);
+        tested += W;
+      }
+    EXPECT_GT(tested, 4000u);
+  };
+  check(std::integral_constant<int, 4>{});
+  check(std::integral_constant<int, 8>{});
+#if defined(RAYLAB_SIMD_AVX512)
+  check(std::integral_constant<int, 16>{});
+#endif
 }
 
 TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {

@@ -166,6 +166,11 @@ struct vfloat {
     for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(signed_bits(a.v[i]) <= signed_bits(b.v[i])) << i;
     return m;
   }
+  friend uint32_t cmp_lt_bits(const vfloat& a, const vfloat& b) {
+    uint32_t m = 0;
+    for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(signed_bits(a.v[i]) < signed_bits(b.v[i])) << i;
+    return m;
+  }
   // Bit i set when lane i's sign bit is set (NaN and -0 included).
   friend uint32_t sign_bits(const vfloat& a) {
     uint32_t m = 0;
@@ -281,6 +286,10 @@ struct vfloat<4> {
   friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
     return 0xFu & ~static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))));
   }
+  // a < b: one comparison and the movemask, no complement (the box test's critical path).
+  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
+    return static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(b.v), _mm_castps_si128(a.v)))));
+  }
 #if defined(RAYLAB_SIMD_AVX512)
   RAYLAB_VF_MASK_COMPARE(_mm)
 #else
@@ -312,6 +321,9 @@ struct vfloat<8> {
     const __m256i gt = _mm256_cmpgt_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v));
     return 0xFFu & ~static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(gt)));
   }
+  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_castps_si256(b.v), _mm256_castps_si256(a.v)))));
+  }
 #else
   friend vfloat min_bits(vfloat a, vfloat b) { return min(a, b); }
   friend vfloat max_bits(vfloat a, vfloat b) { return max(a, b); }
@@ -328,6 +340,7 @@ struct vfloat<8> {
                         static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gh))) << 4;
     return 0xFFu & ~gt;
   }
+  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) { return 0xFFu & ~cmp_le_bits(b, a); }
 #endif
 #if defined(RAYLAB_SIMD_AVX512)
   RAYLAB_VF_MASK_COMPARE(_mm256)
@@ -371,6 +384,9 @@ struct vfloat<16> {
   // The mask register moved out as 32 bits (see vfloat<4> on GCC 12).
   friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
     return _cvtmask16_u32(_mm512_cmple_epi32_mask(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)));
+  }
+  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
+    return _cvtmask16_u32(_mm512_cmplt_epi32_mask(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)));
   }
   RAYLAB_VF_MASK_COMPARE(_mm512)
   friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }

@@ -281,8 +281,7 @@ inline uint32_t frustum_children(const WideNode<8>& node, const PacketFrustum& f
   tnear = max_bits(max_bits(lo[0], lo[1]), max_bits(lo[2], f.tmin));
   // The far padding on the bits (kSlabFarPadUlps) is monotonic in the
   // integer order, so the frustum's padded far bound stays above every ray's.
-  const V8 tfar = add_ulps(min_bits(min_bits(hi[0], hi[1]), min_bits(hi[2], tmax_hi)), kSlabFarPadUlps);
-  return cmp_le_bits(tnear, tfar);
+  return padded_slab_mask(tnear, min_bits(min_bits(hi[0], hi[1]), min_bits(hi[2], tmax_hi)));
 }
 
 // The rays whose own box test (the single-ray FMA slab test, lane by lane)
@@ -296,8 +295,7 @@ inline uint32_t rays_entering(const WideNode<8>& node, uint32_t slot, const Pack
     far[a] = fmadd(V::broadcast(node.bounds[pr.far_row[a]][slot]), pr.inv[a], pr.far_shift[a]);
   }
   const V tnear = max_bits(max_bits(near[0], near[1]), max_bits(near[2], pr.tmin));
-  const V tfar = add_ulps(min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)), kSlabFarPadUlps);
-  return cmp_le_bits(tnear, tfar);
+  return padded_slab_mask(tnear, min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)));
 }
 
 template <int W>
