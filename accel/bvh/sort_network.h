@@ -79,7 +79,6 @@ namespace network_detail {
   return v;
 }
 
-// All 8 lanes sorted descending.
 // The least of the keys in `mask` (at least one lane): three halving steps
 // with immediate shuffles. GCC's _mm512_mask_reduce_min_epu64 would do, but
 // its helpers start from undefined registers (GCC 12: -Wmaybe-uninitialized).
@@ -91,6 +90,7 @@ namespace network_detail {
   return static_cast<uint64_t>(v[0]);  // a vector subscript (GCC, Clang): _mm512_castsi512_si128 warns as above
 }
 
+// All 8 lanes sorted descending.
 [[gnu::always_inline]] inline __m512i sort8_descending(__m512i v) {
   using network_detail::layer;
   v = sort4x2_descending(v);

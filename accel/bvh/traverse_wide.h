@@ -429,8 +429,9 @@ template <int N, bool kScalar = false, typename Prefetch>
   if constexpr (N == 8 && !kScalar) {
     // All eight keys in one register. The next node's reference comes out of
     // registers (two compressed lanes, or a reduction beside the sorting
-    // network), never from a store and its reload: on the critical path of
-    // every step, that was measured at 4-5 % of the closest-hit time.
+    // network), never from a store and its reload, which sat on the path
+    // from one node to the next: +5 to +6 % closest-hit Mrays/s (session 13
+    // of docs/bvh-speed.md).
     const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
     // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
     const __m512i keys = _mm512_or_si512(
