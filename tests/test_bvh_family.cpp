@@ -962,12 +962,12 @@ TEST(BvhTraversal, FarPaddingOnTheBitsIsNeverBelowTheScaling) {
   alignas(64) float in[8] = {0.0f, 1.0f, 1.5f, 2.0f - 0x1p-23f, FLT_MAX, 1e-40f, 3.0f, 1e30f}, out[8];
   add_ulps(V::load(in), kSlabFarPadUlps).store(out);
   for (int i = 0; i < 8; ++i) EXPECT_EQ(bits(out[i]), bits(in[i]) + kSlabFarPadUlps) << in[i];
-  EXPECT_EQ(cmp_le_bits(V::load(in), V::load(out)), 0xFFu);
-  EXPECT_EQ(cmp_le_bits(V::load(out), V::load(in)), 0x00u);
+  EXPECT_EQ(cmp_lt_bits(V::load(in), V::load(out)), 0xFFu);
+  EXPECT_EQ(cmp_lt_bits(V::load(out), V::load(in)), 0x00u);
 }
 
 TEST(BvhTraversal, PaddedSlabMaskIsTheLessOrEqualOfThePaddedFar) {
-  // padded_slab_mask computes tnear <= tfar + kSlabFarPadUlps as tnear <
+  // padded_slab_mask computes tnear <= tfar + kSlabFarPadUlps (on the bits) as tnear <
   // tfar + kSlabFarPadUlps + 1 (one comparison, no complement): the same
   // mask for every pair of entry distances (>= +0, as the kernels' are) and
   // far distances of every kind the FMA kernels produce (negative, -0, +0,
@@ -998,7 +998,14 @@ TEST(BvhTraversal, PaddedSlabMaskIsTheLessOrEqualOfThePaddedFar) {
         n[lane] = tn, f[lane] = tf;
         if (++lane < W) continue;
         lane = 0;
-        const uint32_t expect = cmp_le_bits(V::load(n), add_ulps(V::load(f), kSlabFarPadUlps));
+        // The definition, lane by lane: tnear's bits <= tfar's bits + kSlabFarPadUlps.
+        uint32_t expect = 0;
+        for (int i = 0; i < W; ++i) {
+          int32_t nb, fb;
+          std::memcpy(&nb, &n[i], 4);
+          std::memcpy(&fb, &f[i], 4);
+          expect |= static_cast<uint32_t>(int64_t{nb} <= int64_t{fb} + kSlabFarPadUlps) << i;
+        }
         ASSERT_EQ(padded_slab_mask(V::load(n), V::load(f)), expect);
         tested += W;
       }

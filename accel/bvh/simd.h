@@ -152,7 +152,7 @@ struct vfloat {
     return r;
   }
   // The bits plus k as a signed integer (k units in the last place for a
-  // finite float >= +0), and a <= b in the signed-integer order of the bits.
+  // finite float >= +0), and a < b in the signed-integer order of the bits.
   friend vfloat add_ulps(const vfloat& a, int32_t k) {
     vfloat r;
     for (int i = 0; i < W; ++i) {
@@ -160,11 +160,6 @@ struct vfloat {
       std::memcpy(&r.v[i], &x, 4);
     }
     return r;
-  }
-  friend uint32_t cmp_le_bits(const vfloat& a, const vfloat& b) {
-    uint32_t m = 0;
-    for (int i = 0; i < W; ++i) m |= static_cast<uint32_t>(signed_bits(a.v[i]) <= signed_bits(b.v[i])) << i;
-    return m;
   }
   friend uint32_t cmp_lt_bits(const vfloat& a, const vfloat& b) {
     uint32_t m = 0;
@@ -283,9 +278,6 @@ struct vfloat<4> {
   // read it back as 32 bits (popcnt from memory), so the upper bits were
   // stack garbage (BvhPacket.FrustumCullsOnlyWhatEveryRayCulls failed in the
   // sanitizer build only, in about half of the runs).
-  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
-    return 0xFu & ~static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(a.v), _mm_castps_si128(b.v)))));
-  }
   // a < b: one comparison and the movemask, no complement (the box test's critical path).
   friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
     return static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(_mm_castps_si128(b.v), _mm_castps_si128(a.v)))));
@@ -317,10 +309,6 @@ struct vfloat<8> {
     return {_mm256_castsi256_ps(_mm256_add_epi32(_mm256_castps_si256(a.v), _mm256_set1_epi32(k)))};
   }
   // A vector comparison and a movemask, also with AVX-512 (see vfloat<4>).
-  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
-    const __m256i gt = _mm256_cmpgt_epi32(_mm256_castps_si256(a.v), _mm256_castps_si256(b.v));
-    return 0xFFu & ~static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(gt)));
-  }
   friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
     return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_castps_si256(b.v), _mm256_castps_si256(a.v)))));
   }
@@ -333,14 +321,12 @@ struct vfloat<8> {
     const __m128i hi = _mm_add_epi32(_mm_castps_si128(_mm256_extractf128_ps(a.v, 1)), _mm_set1_epi32(k));
     return {_mm256_insertf128_ps(_mm256_castps128_ps256(_mm_castsi128_ps(lo)), _mm_castsi128_ps(hi), 1)};
   }
-  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
-    const __m128i gl = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_castps256_ps128(a.v)), _mm_castps_si128(_mm256_castps256_ps128(b.v)));
-    const __m128i gh = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_extractf128_ps(a.v, 1)), _mm_castps_si128(_mm256_extractf128_ps(b.v, 1)));
-    const uint32_t gt = static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gl))) |
-                        static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gh))) << 4;
-    return 0xFFu & ~gt;
+  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
+    const __m128i gl = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_castps256_ps128(b.v)), _mm_castps_si128(_mm256_castps256_ps128(a.v)));
+    const __m128i gh = _mm_cmpgt_epi32(_mm_castps_si128(_mm256_extractf128_ps(b.v, 1)), _mm_castps_si128(_mm256_extractf128_ps(a.v, 1)));
+    return static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gl))) |
+           static_cast<uint32_t>(_mm_movemask_ps(_mm_castsi128_ps(gh))) << 4;
   }
-  friend uint32_t cmp_lt_bits(vfloat a, vfloat b) { return 0xFFu & ~cmp_le_bits(b, a); }
 #endif
 #if defined(RAYLAB_SIMD_AVX512)
   RAYLAB_VF_MASK_COMPARE(_mm256)
@@ -382,9 +368,6 @@ struct vfloat<16> {
     return {_mm512_castsi512_ps(_mm512_maskz_add_epi32(0xFFFF, _mm512_castps_si512(a.v), _mm512_set1_epi32(k)))};
   }
   // The mask register moved out as 32 bits (see vfloat<4> on GCC 12).
-  friend uint32_t cmp_le_bits(vfloat a, vfloat b) {
-    return _cvtmask16_u32(_mm512_cmple_epi32_mask(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)));
-  }
   friend uint32_t cmp_lt_bits(vfloat a, vfloat b) {
     return _cvtmask16_u32(_mm512_cmplt_epi32_mask(_mm512_castps_si512(a.v), _mm512_castps_si512(b.v)));
   }
