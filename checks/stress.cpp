@@ -70,6 +70,18 @@ double timed_trace(const Accelerator& a, const RaySet& set, int threads, TraceOu
 
 }  // namespace
 
+namespace {
+// True when the registry accepts the spec (construction only, no build).
+bool spec_is_valid(const std::string& text) {
+  try {
+    make_accelerator(text);
+    return true;
+  } catch (const SpecError&) {
+    return false;
+  }
+}
+}  // namespace
+
 std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::vector<std::string>& specs,
                                           const StressOptions& opt) {
   std::vector<std::string> out;
@@ -87,10 +99,20 @@ std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::v
                                  : spec.params.count("tri")     ? std::string()
                                                                 : caps.mt_variant;
     if (variant.empty()) continue;
+    const Spec variant_spec = Spec::parse(spec.name + ":" + variant);
     Spec v = spec;
-    for (const auto& [key, value] : Spec::parse(spec.name + ":" + variant).params) {
+    for (const auto& [key, value] : variant_spec.params) {
       // A variant parameter the spec already set stays as the spec set it.
       if (key == "tri" || !v.params.count(key)) v.params.insert_or_assign(key, value);
+    }
+    // A variant the spec's other parameters rule out (bvh's is tri=mt on
+    // the bvh2 layout, which node=q8 or packet=16 exclude) is replaced by its
+    // triangle test alone on the spec's own structure, or dropped.
+    if (!spec_is_valid(v.to_string())) {
+      if (!variant_spec.params.count("tri")) continue;
+      v = spec;
+      v.params.insert_or_assign("tri", variant_spec.params.at("tri"));
+      if (!spec_is_valid(v.to_string())) continue;
     }
     add(v.to_string());
   }

@@ -5,6 +5,7 @@
 //   builder=binned|sweep|sbvh|lbvh   opt=none|light|reinsert   layout=bvh2|bvh4|bvh8
 //   packet=0|16 (bvh8: closest-hit batches traced as 16-ray frustum packets)
 //   simd=1|0 (0: the wide layouts walked with scalar tests, same hits and counts)
+//   node=f32|q8 (bvh8: float child boxes, or 8-bit planes on a per-node grid, quantized_node.h)
 //
 // Every combination reports the same statistics: build ms, bytes, nodes,
 // leaves, depth and SAH cost of the traced structure (constants in
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -24,6 +26,7 @@
 #include "accel/bvh/build_sbvh.h"
 #include "accel/bvh/build_sweep_sah.h"
 #include "accel/bvh/optimize_reinsertion.h"
+#include "accel/bvh/quantized_node.h"
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/bvh_outline.h"
 #include "accel/bvh/collapse_wide.h"
@@ -64,6 +67,7 @@ struct BvhConfig {
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
   int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 only
   bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
+  bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
 };
 
 int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
@@ -109,14 +113,19 @@ using SphereKernel = BinaryTreeKernel<SphereBvh, SphereBvhView, sphere_bvh_view,
 // with tri=mt the vectorised Moller-Trumbore test on blocks holding edges
 // (a study option: what watertightness costs on the same tree and walk).
 // kScalar: `simd=0`, the same tree and walk with scalar tests (traverse_wide.h).
-template <int N, int W, bool kScalar = false>
-class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kernel> {
-  using Batch = BatchAccelerator<WideKernel<N, W, kScalar>, Kernel>;
+// Node: WideNode<N>, or QuantNode8 (node=q8; single rays only, not simd=0).
+template <int N, int W, bool kScalar = false, typename Node = WideNode<N>>
+class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel> {
+  using Batch = BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel>;
+  static constexpr bool kFloatNodes = std::is_same_v<Node, WideNode<N>>;
+  static_assert(kFloatNodes || !kScalar, "simd=0 walks float nodes");
 
  public:
-  WideKernel(WideBvh<N, W> bvh, bool packets, TriangleTest tri)
+  WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri)
       : Batch(tri), bvh_(std::move(bvh)), packets_(packets) {
-    view_ = WideView<N, W>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref, wide_fma_origin_limit(bvh_.root_box)};
+    if (packets_ && !kFloatNodes) throw std::logic_error("bvh: packet=16 walks float nodes");
+    view_ = WideView<N, W, Node>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref,
+                                 wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.
     if (packets_ && bvh_.nodes.size() > (wide_ref::kLeafBit >> 3))
       throw std::runtime_error("bvh: too many nodes for packet=16");
@@ -126,7 +135,7 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kern
   // tracer (same answers); counted batches take the single-ray kernel, whose
   // counters mean what every structure's mean.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if constexpr (N == 8 && !kScalar) {
+    if constexpr (N == 8 && !kScalar && kFloatNodes) {
       if (packets_ && !stats) {
         PacketTracer<W>(view_).intersect(rays, hits);
         return;
@@ -144,9 +153,9 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar>, Kern
   size_t bytes() const { return bvh_.bytes(); }
 
  private:
-  WideBvh<N, W> bvh_;
+  WideBvh<N, W, Node> bvh_;
   bool packets_;
-  WideView<N, W> view_;
+  WideView<N, W, Node> view_;
 };
 
 template <int N, int W, bool kScalar = false>
@@ -154,6 +163,17 @@ std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMes
                                          TriangleTest tri, size_t& bytes) {
   const bool edges = tri == TriangleTest::MollerTrumbore;
   auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh, edges), packets, tri);
+  bytes = k->bytes();
+  return k;
+}
+
+// node=q8: the same tree with compressed nodes.
+template <int W>
+std::unique_ptr<Kernel> make_quantized_kernel(const WideTree& tree, const TriangleMesh& mesh, TriangleTest tri,
+                                              size_t& bytes, QuantLooseness& looseness) {
+  const bool edges = tri == TriangleTest::MollerTrumbore;
+  auto k = std::make_unique<WideKernel<8, W, false, QuantNode8>>(
+      quantize_wide_bvh<W>(make_wide_bvh<8, W>(tree, mesh, edges), &looseness), false, tri);
   bytes = k->bytes();
   return k;
 }
@@ -309,7 +329,13 @@ class BvhAccel final : public Accelerator {
       throw std::runtime_error("bvh: tree too deep for the traversal stack");
     const int block = block_width();
     const bool packets = cfg_.packet == kPacketSize;
-    if (!cfg_.simd) {  // block=8 (checked by the spec parser)
+    if (cfg_.quantized) {  // bvh8, simd=1, packet=0 (checked by the spec parser)
+      QuantLooseness loose;
+      if (block == 4) kernel_ = make_quantized_kernel<4>(wide, mesh, cfg_.tri, bytes, loose);
+      else if (block == 8) kernel_ = make_quantized_kernel<8>(wide, mesh, cfg_.tri, bytes, loose);
+      else kernel_ = make_quantized_kernel<16>(wide, mesh, cfg_.tri, bytes, loose);
+      s.extra["q8_area_ratio"] = loose.area_ratio();
+    } else if (!cfg_.simd) {  // block=8 (checked by the spec parser)
       if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
@@ -372,6 +398,9 @@ AcceleratorInfo bvh_accelerator_info() {
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
         one_of({"box", "sphere"})},
+       {"node", "f32", "bvh8 child boxes: f32 (float planes, 256-byte nodes) or q8 (8-bit planes on a per-node "
+        "power-of-two grid, conservative and exactly decoded, 128-byte nodes; single rays, not with packet=16 or simd=0)",
+        one_of({"f32", "q8"})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
@@ -416,6 +445,9 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
+        c.quantized = p.str("node") == "q8";
+        if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
+          throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))
           throw SpecError("bvh: tri=mt with a wide layout needs simd=1 and packet=0 (the scalar and packet tests are watertight only)");
         return std::make_unique<BvhAccel>(c);
@@ -425,7 +457,7 @@ AcceleratorInfo bvh_accelerator_info() {
   info.caps.outline = true;
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
-                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4"};
+                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},
@@ -444,6 +476,7 @@ AcceleratorInfo bvh_accelerator_info() {
                 {"child_fill", "mean children per inner node over the width"},
                 {"simd_bits", "wide layouts: SIMD width of the kernels in bits"},
                 {"block_width", "wide layouts: triangles per SIMD block"},
+                {"q8_area_ratio", "node=q8: sum of decoded child box areas / sum of float child box areas"},
                 {"sphere_volume_ratio", "bound=sphere: sum of sphere volumes / sum of box volumes over all nodes"},
                 {"sphere_area_ratio", "bound=sphere: sum of sphere surface areas / sum of box surface areas"},
                 {"sphere_node_area_ratio", "bound=sphere: mean over nodes of sphere area / box area"}};

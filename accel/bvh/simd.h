@@ -376,6 +376,22 @@ struct vfloat<16> {
 };
 #endif
 
+// Eight bytes as eight floats (0..255, exact): the compressed node's planes.
+inline vfloat<8> u8_to_float8(const uint8_t* p) {
+#if defined(__AVX2__)
+  return {_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))))};
+#elif defined(__AVX__)
+  const __m128i b = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p));
+  const __m128 lo = _mm_cvtepi32_ps(_mm_cvtepu8_epi32(b));
+  const __m128 hi = _mm_cvtepi32_ps(_mm_cvtepu8_epi32(_mm_srli_si128(b, 4)));
+  return {_mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1)};
+#else
+  alignas(32) float f[8];
+  for (int i = 0; i < 8; ++i) f[i] = static_cast<float>(p[i]);
+  return vfloat<8>::load(f);
+#endif
+}
+
 #undef RAYLAB_VF_INTRINSICS
 #undef RAYLAB_VF_MIN_MAX
 #undef RAYLAB_VF_MASK_COMPARE

@@ -40,8 +40,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "accel/bvh/bvh_wide_node.h"
+#include "accel/bvh/quantized_node.h"
 #include "accel/core/hit_recorder.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/triangle_block.h"
@@ -64,9 +66,9 @@ inline bool wide_stack_fits(int max_depth) {
   return max_depth * (N - 1) + 2 * N <= kWideStackSize;
 }
 
-template <int N, int W>
+template <int N, int W, typename Node = WideNode<N>>
 struct WideView {
-  const WideNode<N>* nodes = nullptr;
+  const Node* nodes = nullptr;
   const TriangleBlock<W>* blocks = nullptr;
   uint32_t root_ref = wide_ref::kEmpty;
   // Rays whose origin has a coordinate above this in magnitude take the exact
@@ -227,23 +229,37 @@ template <typename V>
 // kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
 // first in min/max (x86 min/max return the second operand when one is NaN),
 // for axis-parallel rays and builds without FMA.
-template <int N, bool kExact>
-[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r,
+// The planes at float offset `off` of a node (off = plane * N, as
+// WideNodeRay's offsets): loaded, or decoded from the compressed node's bytes
+// (exactly: see quantized_node.h), which puts a conversion and one
+// multiply-add before the box test's.
+template <int N>
+[[gnu::always_inline]] inline simd::vfloat<N> node_planes(const WideNode<N>& node, int off, int /*axis*/) {
+  return simd::vfloat<N>::load(&node.bounds[0][0] + off);
+}
+[[gnu::always_inline]] inline simd::vfloat<8> node_planes(const QuantNode8& node, int off, int axis) {
+  using V = simd::vfloat<8>;
+  // Plane p's bytes start at p * 8 = off.
+  return fmadd(simd::u8_to_float8(&node.q[0][0] + off), V::broadcast(node.cell(axis)), V::broadcast(node.origin[axis]));
+}
+
+template <int N, bool kExact, typename Node>
+[[gnu::always_inline]] inline uint32_t intersect_children(const Node& node, const WideNodeRay<N>& r,
                                                           simd::vfloat<N> tmin, simd::vfloat<N> tmax,
                                                           simd::vfloat<N>& tnear) {
   using V = simd::vfloat<N>;
-  const float* b = &node.bounds[0][0];
+  const auto plane = [&](int off, int axis) { return node_planes(node, off, axis); };
   // tmax is padded like the far planes: the computed entry distance may
   // exceed the true one by a few ulps, and a box holding a hit closer than
   // the current one by less than that must not be culled.
 #if defined(RAYLAB_SIMD_FMA)
   if constexpr (!kExact) {
-    const V nx = fmadd(V::load(b + r.near_off[0]), r.inv[0], r.near_shift[0]);
-    const V ny = fmadd(V::load(b + r.near_off[1]), r.inv[1], r.near_shift[1]);
-    const V nz = fmadd(V::load(b + r.near_off[2]), r.inv[2], r.near_shift[2]);
-    const V fx = fmadd(V::load(b + r.far_off[0]), r.inv[0], r.far_shift[0]);
-    const V fy = fmadd(V::load(b + r.far_off[1]), r.inv[1], r.far_shift[1]);
-    const V fz = fmadd(V::load(b + r.far_off[2]), r.inv[2], r.far_shift[2]);
+    const V nx = fmadd(plane(r.near_off[0], 0), r.inv[0], r.near_shift[0]);
+    const V ny = fmadd(plane(r.near_off[1], 1), r.inv[1], r.near_shift[1]);
+    const V nz = fmadd(plane(r.near_off[2], 2), r.inv[2], r.near_shift[2]);
+    const V fx = fmadd(plane(r.far_off[0], 0), r.inv[0], r.far_shift[0]);
+    const V fy = fmadd(plane(r.far_off[1], 1), r.inv[1], r.far_shift[1]);
+    const V fz = fmadd(plane(r.far_off[2], 2), r.inv[2], r.far_shift[2]);
     // Integer-order min/max (kernel precondition: tmin >= +0). The near
     // distance includes tmin, so its maximum is >= 0 and exact. A negative
     // far distance may not be the true minimum, but any negative one culls
@@ -253,12 +269,12 @@ template <int N, bool kExact>
     return padded_slab_mask(tnear, min_bits(min_bits(fx, fy), min_bits(fz, tmax)));
   }
 #endif
-  const V nx = (V::load(b + r.near_off[0]) - r.org[0]) * r.inv[0];
-  const V ny = (V::load(b + r.near_off[1]) - r.org[1]) * r.inv[1];
-  const V nz = (V::load(b + r.near_off[2]) - r.org[2]) * r.inv[2];
-  const V fx = (V::load(b + r.far_off[0]) - r.org[0]) * r.inv[0];
-  const V fy = (V::load(b + r.far_off[1]) - r.org[1]) * r.inv[1];
-  const V fz = (V::load(b + r.far_off[2]) - r.org[2]) * r.inv[2];
+  const V nx = (plane(r.near_off[0], 0) - r.org[0]) * r.inv[0];
+  const V ny = (plane(r.near_off[1], 1) - r.org[1]) * r.inv[1];
+  const V nz = (plane(r.near_off[2], 2) - r.org[2]) * r.inv[2];
+  const V fx = (plane(r.far_off[0], 0) - r.org[0]) * r.inv[0];
+  const V fy = (plane(r.far_off[1], 1) - r.org[1]) * r.inv[1];
+  const V fz = (plane(r.far_off[2], 2) - r.org[2]) * r.inv[2];
   tnear = max(nx, max(ny, max(nz, tmin)));
   const V tfar0 = min(fx, min(fy, min(fz, tmax)));
   // Padded outward in both signs (negative far distances arise when tmin < 0).
@@ -378,11 +394,12 @@ RAYLAB_NO_VECTORIZE inline bool intersect_leaf_scalar(const TriangleBlock<W>* bl
 // Prefetches what visiting `ref` will read first: a node's plane arrays, or a
 // leaf's first triangle block. Children are prefetched when pushed, so they
 // are (more likely) in cache when popped.
-inline constexpr int kPrefetchNodeLines = 4;  // a 256-byte 8-wide node
 inline constexpr int kPrefetchLeafLines = 5;  // an 8-wide triangle block (320 bytes)
 
-template <int N, int W>
-[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
+template <int N, int W, typename Node>
+[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W, Node>& bvh, uint32_t ref) {
+  // Four lines for the float nodes (a 256-byte 8-wide node; a 4-wide node and its neighbour), two for the compressed.
+  constexpr int kPrefetchNodeLines = std::is_same_v<Node, QuantNode8> ? 2 : 4;
   const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
                                          : reinterpret_cast<const char*>(bvh.nodes + ref);
   const int lines = wide_ref::is_leaf(ref) ? kPrefetchLeafLines : kPrefetchNodeLines;
@@ -396,8 +413,8 @@ template <int N, int W>
 // first (one test may end the ray), then children in descending slot order
 // (as Embree's occlusion traversal); measured best on the benchmark scenes.
 // Pushes all but one child (prefetched) and returns the one to visit next.
-template <int N, int W>
-[[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+template <int N, int W, typename Node>
+[[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
                                                        uint64_t* stack, int& sp) {
   uint32_t leaves = 0;
   for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
@@ -487,8 +504,8 @@ template <int N, bool kScalar = false, typename Prefetch>
   return key_ref(stack[sp]);
 }
 
-template <int N, int W, bool kScalar = false>
-[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
+template <int N, int W, bool kScalar = false, typename Node>
+[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
                                                        simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
   return push_by_distance<N, kScalar>(child, mask, tnear, stack, sp, [&](uint32_t i) { prefetch_child(bvh, child[i]); });
 }
@@ -496,8 +513,8 @@ template <int N, int W, bool kScalar = false>
 // Counting (kCount): a node visited is a child box tested, so an inner node
 // counts its non-empty child slots (accel/core/hit_recorder.h); the root's
 // box is not tested.
-template <int N>
-inline uint64_t count_children(const WideNode<N>& node) {
+template <int N, typename Node>
+inline uint64_t count_children(const Node& node) {
   uint64_t c = 0;
   for (int i = 0; i < N; ++i) c += node.child[i] != wide_ref::kEmpty;
   return c;
@@ -510,8 +527,8 @@ inline uint64_t count_children(const WideNode<N>& node) {
 // kTest: the leaf test, watertight, or Moller-Trumbore on blocks holding
 // edges (tri=mt, a study option; never with kScalar).
 template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false,
-          TriangleTest kTest = TriangleTest::Watertight>
-inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
+          TriangleTest kTest = TriangleTest::Watertight, typename Node>
+inline void walk_wide(const WideView<N, W, Node>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
   static_assert(!(kScalar && kTest != TriangleTest::Watertight), "simd=0 tests watertight only");
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
@@ -576,8 +593,8 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
 
   while (true) {
     if (!wide_ref::is_leaf(cur)) {
-      const WideNode<N>& node = bvh.nodes[cur];
-      if constexpr (kCount) rec.count_nodes(count_children(node));
+      const Node& node = bvh.nodes[cur];
+      if constexpr (kCount) rec.count_nodes(count_children<N>(node));
       V tnear;
       uint32_t mask;
       if constexpr (kScalar) {
@@ -619,8 +636,8 @@ inline void walk_wide(const WideView<N, W>& bvh, const Ray& ray, uint32_t start,
   }
 }
 
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar, TriangleTest kTest>
-inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar, TriangleTest kTest, typename Node>
+inline Hit traverse_wide_kernel(const WideView<N, W, Node>& bvh, const Ray& ray, TraversalStats* stats) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   walk_wide<N, W, kAnyHit, kCount, kAxisParallel, kScalar, kTest>(bvh, ray, bvh.root_ref, rec);
   return rec.hit();
@@ -628,8 +645,9 @@ inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, Trave
 
 // The traversal entry point: validity check, then the kernel for the ray's
 // kind. kScalar: the scalar tests of `bvh:simd=0`; kTest: see walk_wide.
-template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight>
-inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats) {
+template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight,
+          typename Node>
+inline Hit traverse_wide(const WideView<N, W, Node>& bvh, const Ray& ray, TraversalStats* stats) {
   // The fast kernel needs finite reciprocals, tmin >= 0 (see
   // intersect_children) and an origin not far beyond the scene
   // (wide_fma_origin_limit): one test for all of it and validity.
