@@ -28,13 +28,12 @@ struct AxisGrid {
   uint8_t lo[8] = {}, hi[8] = {};
 };
 
-// Smallest e >= e0 whose grid holds every child box of the axis with
-// representable planes. `used` marks the slots to encode.
+// The grid of the smallest cell exponent that holds every used child's
+// interval on this axis with representable planes, starting from the least
+// that can: one ulp of the node's largest coordinate, 255 cells across the
+// node. `used` marks the slots to encode.
 AxisGrid quantize_axis(const float* lo, const float* hi, uint32_t used, float node_lo, float node_hi) {
   const float m = std::max(std::fabs(node_lo), std::fabs(node_hi));
-  // A cell at least one float ulp of the node's largest coordinate keeps
-  // every plane a small multiple of it; at least 1/255 of the extent so
-  // that 255 cells span the node.
   int e = m >= FLT_MIN ? std::ilogb(m) - 23 : kMinCellExp;
   const double extent = static_cast<double>(node_hi) - static_cast<double>(node_lo);
   while (std::ldexp(255.0, e) < extent) ++e;

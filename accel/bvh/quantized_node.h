@@ -18,6 +18,7 @@
 // Unused slots decode to lo = origin + 255 cells > hi = origin on every axis
 // and hold the empty leaf reference, so a ray enters them only if it starts
 // hundreds of millions of cells away, and then does no work there.
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 
