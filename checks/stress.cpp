@@ -68,9 +68,6 @@ double timed_trace(const Accelerator& a, const RaySet& set, int threads, TraceOu
   return t.seconds();
 }
 
-}  // namespace
-
-namespace {
 // True when the registry accepts the spec (construction only, no build).
 bool spec_is_valid(const std::string& text) {
   try {
@@ -80,6 +77,7 @@ bool spec_is_valid(const std::string& text) {
     return false;
   }
 }
+
 }  // namespace
 
 std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::vector<std::string>& specs,

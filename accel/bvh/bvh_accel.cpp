@@ -123,7 +123,6 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
  public:
   WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri)
       : Batch(tri), bvh_(std::move(bvh)), packets_(packets) {
-    if (packets_ && !kFloatNodes) throw std::logic_error("bvh: packet=16 walks float nodes");
     view_ = WideView<N, W, Node>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref,
                                  wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.

@@ -224,11 +224,6 @@ template <typename V>
   return cmp_lt_bits(tnear, add_ulps(tfar, kSlabFarPadUlps + 1));
 }
 
-// Tests the N child boxes of a node; returns the mask of children whose
-// (padded) slab interval overlaps [tmin, tmax], and their entry distances.
-// kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
-// first in min/max (x86 min/max return the second operand when one is NaN),
-// for axis-parallel rays and builds without FMA.
 // The planes at float offset `off` of a node (off = plane * N, as
 // WideNodeRay's offsets): loaded, or decoded from the compressed node's bytes
 // (exactly: see quantized_node.h), which puts a conversion and one
@@ -243,6 +238,11 @@ template <int N>
   return fmadd(simd::u8_to_float8(&node.q[0][0] + off), V::broadcast(node.cell(axis)), V::broadcast(node.origin[axis]));
 }
 
+// Tests the N child boxes of a node; returns the mask of children whose
+// (padded) slab interval overlaps [tmin, tmax], and their entry distances.
+// kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
+// first in min/max (x86 min/max return the second operand when one is NaN),
+// for axis-parallel rays and builds without FMA.
 template <int N, bool kExact, typename Node>
 [[gnu::always_inline]] inline uint32_t intersect_children(const Node& node, const WideNodeRay<N>& r,
                                                           simd::vfloat<N> tmin, simd::vfloat<N> tmax,
