@@ -119,7 +119,9 @@ std::vector<std::string> family_specs() {
        {"bvh:opt=reinsert,layout=bvh2", "bvh:opt=reinsert,layout=bvh8", "bvh:opt=reinsert,builder=sbvh,layout=bvh4",
         "bvh:block=4,leaf=4,bleaf=1", "bvh:block=8,leaf=8", "bvh:block=16,leaf=48", "bvh:layout=bvh4,block=16",
         "bvh:builder=sbvh,alpha=0,sbudget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8", "bvh:layout=bvh2,leaf=1",
-        "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32"})
+        "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
+        "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
+        "bvh:layout=bvh16,builder=lbvh"})
     specs.push_back(extra);
   return specs;
 }
@@ -237,7 +239,8 @@ TEST(BvhFamily, RejectsBadParameters) {
                            "bvh:bins=1", "bvh:alpha=-1", "bvh:sbudget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
                            "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
                            "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
-                           "bvh:node=q8,layout=bvh2"})
+                           "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,simd=0",
+                           "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt"));
@@ -431,7 +434,7 @@ TEST(BvhCollapse, EveryTriangleReachableOnceAndBoxesEnclose) {
   const test::NamedMesh s = test::soup(3000, 41);
   for (const char* b : {"binned", "lbvh", "reinsert"}) {
     const BinaryBvh tree = build_with(b, s.mesh);
-    for (int width : {2, 4, 8}) {
+    for (int width : {2, 4, 8, 16}) {
       for (int block : {1, 4, 8, 16}) {
         if ((width == 2) != (block == 1)) continue;
         SCOPED_TRACE(fmt::format("{} width {} block {}", b, width, block));
@@ -926,7 +929,7 @@ TEST(BvhTriangleBlock, PaddingLanesRepeatTheFirstTriangle) {
 
 TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
   for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
-                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1"}) {
+                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1", "bvh:layout=bvh16"}) {
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the radius.
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
@@ -990,6 +993,47 @@ TEST(BvhTraversal, MinKeyIsTheLeastKeyInTheMask) {
 }
 #endif
 
+TEST(BvhTraversal, SixteenWidePushEqualsTheScalarOrder) {
+  // layout=bvh16's closest-hit step: the vector path (two key registers,
+  // compress and expand, the 8-key network or an in-place sort above eight)
+  // must push the same keys in the same order, return the same nearest
+  // child and prefetch the same slots as the portable insertion sort, for
+  // masks of every size, tied and zero distances, leaves and inner nodes.
+  Pcg32 rng(11, 5);
+  alignas(64) uint32_t refs[16];
+  alignas(64) float dist[16];
+  for (int round = 0; round < 3000; ++round) {
+    for (int i = 0; i < 16; ++i) {
+      refs[i] = rng.next() % 3 == 0 ? wide_ref::leaf(rng.next() % 1000, 1 + rng.next() % 3) : rng.next() % 100000;
+      const uint32_t kind = rng.next() % 4;
+      dist[i] = kind == 0 ? 0.0f : kind == 1 ? static_cast<float>(rng.next() % 4) : rng.uniform() * 100.0f;
+    }
+    for (int i = 1; i < 16; ++i)  // slots hold distinct references, as in a node
+      for (int j = 0; j < i; ++j)
+        if (refs[j] == refs[i]) refs[i] ^= 0x40000u;
+    uint32_t mask = rng.next() & 0xFFFFu;
+    if (round < 16) mask = (1u << (round + 1)) - 1u;  // 1..16 children, every count
+    if ((mask & (mask - 1)) == 0) mask |= 0x8001u;    // the walk enters a single child directly
+    const auto tnear = simd::vfloat<16>::load(dist);
+    alignas(64) uint64_t got[64] = {}, want[64] = {};
+    int sp_got = 3, sp_want = 3;  // on top of earlier entries
+    uint32_t pre_got = 0, pre_want = 0;
+    const uint32_t next_got = push_by_distance<16>(refs, mask, tnear, got, sp_got, [&](uint32_t i) { pre_got |= 1u << i; });
+    const uint32_t next_want =
+        push_by_distance<16, true>(refs, mask, tnear, want, sp_want, [&](uint32_t i) { pre_want |= 1u << i; });
+    ASSERT_EQ(next_got, next_want) << "mask " << mask;
+    ASSERT_EQ(sp_got, sp_want) << "mask " << mask;
+    ASSERT_EQ(sp_got, 3 + simd::popcount(mask) - 1);
+    for (int i = 3; i < sp_got; ++i) ASSERT_EQ(got[i], want[i]) << "mask " << mask << " entry " << i;
+    EXPECT_EQ(pre_got & ~mask, 0u);
+    EXPECT_EQ(pre_got, pre_want) << "mask " << mask;
+    // The nearest is the least key.
+    uint64_t least = ~uint64_t{0};
+    for (uint32_t m = mask; m != 0; m &= m - 1) least = std::min(least, child_key(dist[simd::ctz(m)], refs[simd::ctz(m)]));
+    ASSERT_EQ(next_got, key_ref(least));
+  }
+}
+
 TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
   // Axis-aligned slabs of triangles; rays start inside the scene, on box
   // faces and parallel to faces (zero direction components).
@@ -1003,7 +1047,7 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
     m.triangles.push_back({b, b + 1, b + 2});
     m.triangles.push_back({b, b + 2, b + 3});
   }
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:block=4,leaf=1"}) {
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:block=4,leaf=1", "bvh:layout=bvh16,leaf=1"}) {
     auto a = make_accelerator(spec);
     a->build(m);
     for (float z0 : {0.0f, 0.5f, 2.0f, 5.0f}) {

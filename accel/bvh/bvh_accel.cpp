@@ -2,7 +2,7 @@
 // an optional optimisation pass, and a traversal layout the tree is converted
 // into:
 //
-//   builder=binned|sweep|sbvh|lbvh   opt=none|light|reinsert   layout=bvh2|bvh4|bvh8
+//   builder=binned|sweep|sbvh|lbvh   opt=none|light|reinsert   layout=bvh2|bvh4|bvh8|bvh16
 //   packet=0|16 (bvh8: closest-hit batches traced as 16-ray frustum packets)
 //   simd=1|0 (0: the wide layouts walked with scalar tests, same hits and counts)
 //   node=f32|q8 (bvh8: float child boxes, or 8-bit planes on a per-node grid, quantized_node.h)
@@ -43,7 +43,7 @@ namespace raylab {
 namespace {
 
 enum class BuilderKind { Binned, Sweep, Sbvh, Lbvh };
-enum class LayoutKind { Bvh2, Bvh4, Bvh8 };
+enum class LayoutKind { Bvh2, Bvh4, Bvh8, Bvh16 };
 
 struct BvhConfig {
   BuilderKind builder = BuilderKind::Binned;
@@ -70,7 +70,7 @@ struct BvhConfig {
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
 };
 
-int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : 8; }
+int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : l == LayoutKind::Bvh16 ? 16 : 8; }
 
 // The traversal structure behind the accelerator: one virtual call per batch.
 class Kernel {
@@ -324,8 +324,10 @@ class BvhAccel final : public Accelerator {
       kernel_ = std::make_unique<Bvh2Kernel>(std::move(l), cfg_.tri);
       return bytes;
     }
-    if (!(cfg_.layout == LayoutKind::Bvh4 ? wide_stack_fits<4>(shape.max_depth) : wide_stack_fits<8>(shape.max_depth)))
-      throw std::runtime_error("bvh: tree too deep for the traversal stack");
+    const bool fits = cfg_.layout == LayoutKind::Bvh4    ? wide_stack_fits<4>(shape.max_depth)
+                      : cfg_.layout == LayoutKind::Bvh16 ? wide_stack_fits<16>(shape.max_depth)
+                                                         : wide_stack_fits<8>(shape.max_depth);
+    if (!fits) throw std::runtime_error("bvh: tree too deep for the traversal stack");
     const int block = block_width();
     const bool packets = cfg_.packet == kPacketSize;
     if (cfg_.quantized) {  // bvh8, simd=1, packet=0 (checked by the spec parser)
@@ -337,6 +339,8 @@ class BvhAccel final : public Accelerator {
     } else if (!cfg_.simd) {  // block=8 (checked by the spec parser)
       if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
+    } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8, single rays (checked by the spec parser)
+      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
       if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes);
       else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes);
@@ -366,7 +370,9 @@ AcceleratorInfo bvh_accelerator_info() {
                   simd::isa_name()),
       {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)",
         one_of({"binned", "sweep", "sbvh", "lbvh"})},
-       {"layout", "bvh8", "traversal layout: bvh2, bvh4 or bvh8", one_of({"bvh2", "bvh4", "bvh8"})},
+       {"layout", "bvh8", "traversal layout: bvh2, bvh4, bvh8 or bvh16 (16-wide nodes, 448 bytes: one AVX-512 "
+        "instruction per plane; single rays, block=8, simd=1)",
+        one_of({"bvh2", "bvh4", "bvh8", "bvh16"})},
        {"opt", "light", "post-build optimisation: none, light (one reinsertion round over the worst 2 % of the nodes, "
         "4-triangle binary leaves; the default) or reinsert (up to 32 rounds over 15 %, single-triangle leaves; the "
         "high-quality preset)",
@@ -410,7 +416,7 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.spheres && p.given("layout") && p.str("layout") != "bvh2")
           throw SpecError("bvh: bound=sphere needs layout=bvh2");
         const auto& l = c.spheres ? std::string("bvh2") : p.str("layout");
-        c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : LayoutKind::Bvh8;
+        c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : l == "bvh16" ? LayoutKind::Bvh16 : LayoutKind::Bvh8;
         // opt=light (the default since session 8 of docs/bvh-speed.md): one
         // round over the worst 2 % of the nodes gains 2-5 % on every ray set
         // of the interior views for about 10 % more build time; the full
@@ -444,6 +450,8 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
+        if (c.layout == LayoutKind::Bvh16 && (c.block != 8 || !c.simd))
+          throw SpecError("bvh: layout=bvh16 needs block=8 and simd=1");
         c.quantized = p.str("node") == "q8";
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
@@ -456,7 +464,8 @@ AcceleratorInfo bvh_accelerator_info() {
   info.caps.outline = true;
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
-                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt"};
+                "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt",
+                "bvh:layout=bvh16"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},

@@ -73,5 +73,6 @@ template WideBvh<4, 16> make_wide_bvh<4, 16>(const WideTree&, const TriangleMesh
 template WideBvh<8, 4> make_wide_bvh<8, 4>(const WideTree&, const TriangleMesh&, bool);
 template WideBvh<8, 8> make_wide_bvh<8, 8>(const WideTree&, const TriangleMesh&, bool);
 template WideBvh<8, 16> make_wide_bvh<8, 16>(const WideTree&, const TriangleMesh&, bool);
+template WideBvh<16, 8> make_wide_bvh<16, 8>(const WideTree&, const TriangleMesh&, bool);
 
 }  // namespace raylab

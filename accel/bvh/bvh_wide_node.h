@@ -1,9 +1,9 @@
 #pragma once
-// N-wide BVH layout (N = 4 or 8): each node holds its children's boxes in
+// N-wide BVH layout (N = 4, 8 or 16): each node holds its children's boxes in
 // structure-of-arrays order (all children's lo.x, then hi.x, lo.y, ...), so
 // one vector load per plane tests every child at once, and one 32-bit
 // reference per child. 4-wide nodes take 128 bytes, 8-wide nodes 256 (four
-// cache lines, like Embree's uncompressed BVH8 node).
+// cache lines, like Embree's uncompressed BVH8 node), 16-wide nodes 448.
 //
 // Child references:
 //   bit 31 = 0: inner child, the index of its node

@@ -19,7 +19,8 @@ constexpr uint32_t kParallelDpSize = 8192;  // subtrees with this many reference
 class Collapser {
  public:
   Collapser(const BinaryBvh& tree, const CollapseOptions& o) : tree_(tree), opt_(o), n_(o.width) {
-    if (n_ != 2 && n_ != 4 && n_ != 8) throw std::invalid_argument("collapse: width must be 2, 4 or 8");
+    if (n_ != 2 && n_ != 4 && n_ != 8 && n_ != kMaxWideWidth)
+      throw std::invalid_argument("collapse: width must be 2, 4, 8 or 16");
     opt_.block_width = std::max(1, opt_.block_width);
     opt_.max_leaf = std::max(1, opt_.max_leaf);
     counts_ = subtree_ref_counts(tree.nodes);
@@ -123,8 +124,8 @@ class Collapser {
     }
     const float* cl = &cost_[l * n_];
     const float* cr = &cost_[r * n_];
-    float d[9];
-    uint8_t dk[9];
+    float d[kMaxWideWidth + 1];
+    uint8_t dk[kMaxWideWidth + 1];
     for (int i = 2; i <= n_; ++i) {
       d[i] = kInf;
       dk[i] = 1;

@@ -1,5 +1,5 @@
 #pragma once
-// SAH-optimal collapse of a binary BVH into an N-wide BVH (N = 2, 4 or 8) by
+// SAH-optimal collapse of a binary BVH into an N-wide BVH (N = 2, 4, 8 or 16) by
 // dynamic programming over the binary tree, after Ylitie, Karras & Laine,
 // "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"
 // (HPG 2017). For every binary node n and slot budget i = 1..N:
@@ -22,7 +22,7 @@
 namespace raylab {
 
 struct CollapseOptions {
-  int width = 8;            // children per wide node: 2, 4 or 8
+  int width = 8;            // children per wide node: 2, 4, 8 or 16
   int block_width = 4;      // triangles tested together (leaf cost unit)
   int max_leaf = 8;         // references per leaf (after duplicates are removed: at most this)
   int max_leaf_blocks = 15; // hard cap from the child encoding
@@ -32,6 +32,8 @@ struct CollapseOptions {
 
 // The collapsed tree in a layout-neutral form; layouts convert it into their
 // node formats. Node 0 is the root (unless root_leaf >= 0: the whole tree is one leaf).
+inline constexpr int kMaxWideWidth = 16;
+
 struct WideTree {
   struct Child {
     Aabb box;
@@ -39,7 +41,7 @@ struct WideTree {
     uint32_t index = 0;  // inner: node index; leaf: leaf index
   };
   struct Node {
-    Child child[8];
+    Child child[kMaxWideWidth];
     int count = 0;
   };
   std::vector<Node> nodes;

@@ -1,5 +1,5 @@
 #pragma once
-// Single-ray traversal of the N-wide BVH (N = 4 or 8) with W-wide triangle
+// Single-ray traversal of the N-wide BVH (N = 4, 8 or 16) with W-wide triangle
 // blocks. One routine serves closest hit and any hit (kAnyHit, which returns
 // at the first hit) and the instrumented variant (kCount); both are template
 // parameters, so the uninstrumented kernels pay nothing.
@@ -398,8 +398,9 @@ inline constexpr int kPrefetchLeafLines = 5;  // an 8-wide triangle block (320 b
 
 template <int N, int W, typename Node>
 [[gnu::always_inline]] inline void prefetch_child(const WideView<N, W, Node>& bvh, uint32_t ref) {
-  // Four lines for the float nodes (a 256-byte 8-wide node; a 4-wide node and its neighbour), two for the compressed.
-  constexpr int kPrefetchNodeLines = std::is_same_v<Node, QuantNode8> ? 2 : 4;
+  // Four lines for the float nodes (a 256-byte 8-wide node; a 4-wide node and its neighbour), seven for
+  // a 448-byte 16-wide node, two for the compressed.
+  constexpr int kPrefetchNodeLines = std::is_same_v<Node, QuantNode8> ? 2 : N == 16 ? 7 : 4;
   const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
                                          : reinterpret_cast<const char*>(bvh.nodes + ref);
   const int lines = wide_ref::is_leaf(ref) ? kPrefetchLeafLines : kPrefetchNodeLines;
@@ -476,6 +477,51 @@ template <int N, bool kScalar = false, typename Prefetch>
     sp += k - 1;
     return key_ref(nearest);
   }
+  if constexpr (N == 16 && !kScalar) {
+    // Sixteen keys in two registers (slots 0..7 and 8..15). Up to eight hit
+    // children are compressed into one register and take the 8-wide path's
+    // steps: the nearest of two by min/max, of more by the reduction beside
+    // the network. More than eight: both halves stored and sorted in place.
+    const __m512i bits = _mm512_maskz_max_epi32(0xFFFF, _mm512_castps_si512(tnear.v), _mm512_setzero_si512());
+    const __m512i refx = _mm512_xor_si512(_mm512_loadu_si512(refs), _mm512_set1_epi32(static_cast<int>(kKeyRefFlip)));
+    const auto keys_of = [](__m256i b, __m256i r) {  // 8 x (distance bits << 32 | flipped ref)
+      return _mm512_or_si512(_mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, b), 32),
+                             _mm512_maskz_cvtepu32_epi64(0xFF, r));
+    };
+    const __m512i klo = keys_of(_mm512_maskz_extracti64x4_epi64(0xF, bits, 0), _mm512_maskz_extracti64x4_epi64(0xF, refx, 0));
+    const __m512i khi = keys_of(_mm512_maskz_extracti64x4_epi64(0xF, bits, 1), _mm512_maskz_extracti64x4_epi64(0xF, refx, 1));
+    const __mmask8 mlo = static_cast<__mmask8>(mask & 0xFF), mhi = static_cast<__mmask8>(mask >> 8);
+    const int nlo = simd::popcount(mlo & 0xFFu);
+    const int k = simd::popcount(mask);
+    const __m512i clo = _mm512_maskz_compress_epi64(mlo, klo);
+    const __m512i chi = _mm512_maskz_compress_epi64(mhi, khi);
+    const uint32_t rest = mask & (mask - 1);
+    if (k <= 8) {
+      // The hit keys of slots 8..15 into lanes nlo..k-1, after those of slots 0..7.
+      const __mmask8 upper = static_cast<__mmask8>(((1u << k) - 1u) & ~((1u << nlo) - 1u));
+      __m512i sorted = _mm512_mask_expand_epi64(clo, upper, chi);
+      if ((rest & (rest - 1)) == 0) {
+        const uint64_t k0 = static_cast<uint64_t>(sorted[0]);
+        const uint64_t k1 = static_cast<uint64_t>(sorted[1]);
+        const uint32_t i0 = simd::ctz(mask), i1 = simd::ctz(rest);
+        prefetch(k0 > k1 ? i0 : i1);
+        stack[sp++] = std::max(k0, k1);
+        return key_ref(std::min(k0, k1));
+      }
+      const uint64_t nearest = min_key(sorted, static_cast<__mmask8>((1u << k) - 1u));
+      sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
+      _mm512_storeu_si512(stack + sp, sorted);
+      for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
+      sp += k - 1;
+      return key_ref(nearest);
+    }
+    _mm512_storeu_si512(stack + sp, clo);
+    _mm512_storeu_si512(stack + sp + nlo, chi);
+    sort_keys_descending(stack + sp, k);
+    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
+    sp += k - 1;
+    return key_ref(stack[sp]);
+  }
 #endif
   alignas(64) float dist[N];
   tnear.store(dist);
@@ -498,8 +544,9 @@ template <int N, bool kScalar = false, typename Prefetch>
     const uint32_t i = simd::ctz(m);
     keys[n++] = child_key(dist[i], refs[i]);
   }
-  if constexpr (kScalar) sort_keys_descending(keys, n);  // keys are unique: the same order
+  if constexpr (kScalar || N > 8) sort_keys_descending(keys, n);  // keys are unique: the same order
   else sort8_keys_descending(keys, n);
+  for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
   sp += k - 1;
   return key_ref(stack[sp]);
 }
