@@ -121,7 +121,7 @@ std::vector<std::string> family_specs() {
         "bvh:builder=sbvh,alpha=0,sbudget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8", "bvh:layout=bvh2,leaf=1",
         "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
-        "bvh:layout=bvh16,builder=lbvh"})
+        "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0"})
     specs.push_back(extra);
   return specs;
 }
@@ -239,7 +239,7 @@ TEST(BvhFamily, RejectsBadParameters) {
                            "bvh:bins=1", "bvh:alpha=-1", "bvh:sbudget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
                            "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
                            "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
-                           "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,simd=0",
+                           "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
                            "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
@@ -614,7 +614,7 @@ TEST(BvhQuantizedNode, SameAnswersAsFloatNodes) {
     std::vector<Ray> rays = test::segment_rays(mesh, 3000, 17);
     const std::vector<Ray> cam = test::camera_rays(mesh, 48, 48);
     rays.insert(rays.end(), cam.begin(), cam.end());
-    auto f = make_accelerator("bvh");
+    auto f = make_accelerator("bvh:layout=bvh8");  // the tree node=q8 compresses
     auto q = make_accelerator("bvh:node=q8");
     const BuildStats fs = f->build(mesh);
     const BuildStats qs = q->build(mesh);

@@ -338,6 +338,7 @@ class BvhAccel final : public Accelerator {
       s.extra["q8_area_ratio"] = loose.area_ratio();
     } else if (!cfg_.simd) {  // block=8 (checked by the spec parser)
       if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
+      else if (cfg_.layout == LayoutKind::Bvh16) kernel_ = make_wide_kernel<16, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8, single rays (checked by the spec parser)
       kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes);
@@ -352,6 +353,7 @@ class BvhAccel final : public Accelerator {
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
+    s.extra["node_width"] = layout_width(cfg_.layout);
     return bytes;
   }
 
@@ -370,9 +372,10 @@ AcceleratorInfo bvh_accelerator_info() {
                   simd::isa_name()),
       {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)",
         one_of({"binned", "sweep", "sbvh", "lbvh"})},
-       {"layout", "bvh8", "traversal layout: bvh2, bvh4, bvh8 or bvh16 (16-wide nodes, 448 bytes: one AVX-512 "
-        "instruction per plane; single rays, block=8, simd=1)",
-        one_of({"bvh2", "bvh4", "bvh8", "bvh16"})},
+       {"layout", "auto", "traversal layout: bvh2, bvh4, bvh8, bvh16 (16-wide nodes, 448 bytes: one AVX-512 "
+        "instruction per plane; single rays, block=8, node=f32) or auto (bvh16 where the kernel is AVX-512 "
+        "and the spec allows it, else bvh8)",
+        one_of({"auto", "bvh2", "bvh4", "bvh8", "bvh16"})},
        {"opt", "light", "post-build optimisation: none, light (one reinsertion round over the worst 2 % of the nodes, "
         "4-triangle binary leaves; the default) or reinsert (up to 32 rounds over 15 %, single-triangle leaves; the "
         "high-quality preset)",
@@ -416,6 +419,7 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.spheres && p.given("layout") && p.str("layout") != "bvh2")
           throw SpecError("bvh: bound=sphere needs layout=bvh2");
         const auto& l = c.spheres ? std::string("bvh2") : p.str("layout");
+        // auto is settled below, once packet, simd, node and block are known.
         c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : l == "bvh16" ? LayoutKind::Bvh16 : LayoutKind::Bvh8;
         // opt=light (the default since session 8 of docs/bvh-speed.md): one
         // round over the worst 2 % of the nodes gains 2-5 % on every ray set
@@ -446,13 +450,22 @@ AcceleratorInfo bvh_accelerator_info() {
         c.tri = parse_triangle_test(p);
         c.packet = p.integer("packet");
         c.simd = parse_simd(p);
+        c.quantized = p.str("node") == "q8";
+        // layout=auto: 16-wide nodes where one AVX-512 instruction tests a
+        // plane of all sixteen children and nothing in the spec needs 8-wide
+        // ones (simd=0 follows, so that it stays the same tree with scalar
+        // tests); they beat bvh8 on every ray set of the interior views there
+        // (docs/bvh-speed.md, session 15). Elsewhere a 16-wide plane takes
+        // two or four instructions, and bvh8 stays the layout.
+        if (l == "auto")
+          c.layout = simd::isa_bits() >= 512 && c.packet == 0 && !c.quantized && c.block == 8
+                         ? LayoutKind::Bvh16
+                         : LayoutKind::Bvh8;
         if (!c.simd && c.packet != 0) throw SpecError("bvh: packet=16 needs simd=1");
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
-        if (c.layout == LayoutKind::Bvh16 && (c.block != 8 || !c.simd))
-          throw SpecError("bvh: layout=bvh16 needs block=8 and simd=1");
-        c.quantized = p.str("node") == "q8";
+        if (c.layout == LayoutKind::Bvh16 && c.block != 8) throw SpecError("bvh: layout=bvh16 needs block=8");
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))
@@ -465,7 +478,7 @@ AcceleratorInfo bvh_accelerator_info() {
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
                 "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt",
-                "bvh:layout=bvh16"};
+                "bvh:layout=bvh16", "bvh:layout=bvh8"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},
@@ -484,6 +497,7 @@ AcceleratorInfo bvh_accelerator_info() {
                 {"child_fill", "mean children per inner node over the width"},
                 {"simd_bits", "wide layouts: SIMD width of the kernels in bits"},
                 {"block_width", "wide layouts: triangles per SIMD block"},
+                {"node_width", "wide layouts: children per node (4, 8 or 16; layout=auto resolved)"},
                 {"q8_area_ratio", "node=q8: sum of decoded child box areas / sum of float child box areas"},
                 {"sphere_volume_ratio", "bound=sphere: sum of sphere volumes / sum of box volumes over all nodes"},
                 {"sphere_area_ratio", "bound=sphere: sum of sphere surface areas / sum of box surface areas"},
