@@ -27,6 +27,7 @@ class Collapser {
     cost_.assign(tree.nodes.size() * n_, kInf);
     choice_.assign(tree.nodes.size() * n_, 0);
     inner_split_.assign(tree.nodes.size(), 0);
+    slots_.assign(tree.nodes.size(), 1);
   }
 
   WideTree run() {
@@ -124,18 +125,30 @@ class Collapser {
     }
     const float* cl = &cost_[l * n_];
     const float* cr = &cost_[r * n_];
+    // A subtree with s binary leaves never uses more than s slots: C(x, i) =
+    // C(x, s) for i > s. So D(n, i) needs k only in [i - s(r), s(l)], and
+    // D(n, i) = D(n, s(l) + s(r)) above that; the same optimum for a fraction
+    // of the work at the many small subtrees near the leaves (what makes the
+    // 16-wide collapse affordable).
+    const int sl = slots_[l], sr = slots_[r];
+    const int sn = std::min(n_, sl + sr);
+    slots_[n] = static_cast<uint8_t>(sn);
     float d[kMaxWideWidth + 1];
     uint8_t dk[kMaxWideWidth + 1];
-    for (int i = 2; i <= n_; ++i) {
+    for (int i = 2; i <= sn; ++i) {
       d[i] = kInf;
       dk[i] = 1;
-      for (int k = 1; k < i; ++k) {
+      for (int k = std::max(1, i - sr), k_end = std::min(i - 1, sl); k <= k_end; ++k) {
         const float v = cl[k - 1] + cr[i - k - 1];
         if (v < d[i]) {
           d[i] = v;
           dk[i] = static_cast<uint8_t>(k);
         }
       }
+    }
+    for (int i = sn + 1; i <= n_; ++i) {
+      d[i] = d[sn];
+      dk[i] = dk[sn];
     }
     const float area = node.bounds().half_area();
     const float as_leaf = leaf_cost(n, false);
@@ -198,6 +211,7 @@ class Collapser {
   std::vector<float> cost_;
   std::vector<uint8_t> choice_;      // per (node, i): see file comment
   std::vector<uint8_t> inner_split_; // k of D(n, N)
+  std::vector<uint8_t> slots_;       // min(N, binary leaves of the subtree): the most slots it can fill
   mutable std::vector<uint32_t> gather_stack_;
 };
 
