@@ -70,7 +70,9 @@ struct BvhConfig {
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
 };
 
-int layout_width(LayoutKind l) { return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : l == LayoutKind::Bvh16 ? 16 : 8; }
+int layout_width(LayoutKind l) {
+  return l == LayoutKind::Bvh2 ? 2 : l == LayoutKind::Bvh4 ? 4 : l == LayoutKind::Bvh16 ? 16 : 8;
+}
 
 // The traversal structure behind the accelerator: one virtual call per batch.
 class Kernel {
@@ -420,7 +422,10 @@ AcceleratorInfo bvh_accelerator_info() {
           throw SpecError("bvh: bound=sphere needs layout=bvh2");
         const auto& l = c.spheres ? std::string("bvh2") : p.str("layout");
         // auto is settled below, once packet, simd, node and block are known.
-        c.layout = l == "bvh2" ? LayoutKind::Bvh2 : l == "bvh4" ? LayoutKind::Bvh4 : l == "bvh16" ? LayoutKind::Bvh16 : LayoutKind::Bvh8;
+        c.layout = l == "bvh2"    ? LayoutKind::Bvh2
+                   : l == "bvh4"  ? LayoutKind::Bvh4
+                   : l == "bvh16" ? LayoutKind::Bvh16
+                                  : LayoutKind::Bvh8;
         // opt=light (the default since session 8 of docs/bvh-speed.md): one
         // round over the worst 2 % of the nodes gains 2-5 % on every ray set
         // of the interior views for about 10 % more build time; the full

@@ -30,10 +30,10 @@ struct CollapseOptions {
   float block_cost = 1.0f;  // C_block: cost of testing one block of block_width triangles
 };
 
-// The collapsed tree in a layout-neutral form; layouts convert it into their
-// node formats. Node 0 is the root (unless root_leaf >= 0: the whole tree is one leaf).
 inline constexpr int kMaxWideWidth = 16;
 
+// The collapsed tree in a layout-neutral form; layouts convert it into their
+// node formats. Node 0 is the root (unless root_leaf >= 0: the whole tree is one leaf).
 struct WideTree {
   struct Child {
     Aabb box;

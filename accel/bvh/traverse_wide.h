@@ -435,6 +435,38 @@ template <int N, int W, typename Node>
   }
 }
 
+#if defined(RAYLAB_SIMD_AVX512)
+// The AVX-512 closest-hit step once the hit children's keys are packed into
+// lanes [0, k) of one register in slot order (mask: the slots they came
+// from, 2 <= k <= 8). The next node's reference comes out of registers (two
+// packed lanes, or nearest(), a reduction beside the sorting network), never
+// from a store and its reload, which sat on the path from one node to the
+// next: +5 to +6 % closest-hit Mrays/s (session 13 of docs/bvh-speed.md).
+template <typename Nearest, typename Prefetch>
+[[gnu::always_inline]] inline uint32_t push_packed_keys(__m512i packed, uint32_t mask, Nearest&& nearest,
+                                                        uint64_t* stack, int& sp, Prefetch&& prefetch) {
+  const uint32_t rest = mask & (mask - 1);
+  if ((rest & (rest - 1)) == 0) {
+    // Two children: order their keys with min/max (no branch to mispredict).
+    // Vector subscripts (GCC, Clang): _mm512_castsi512_si128 warns (sort_network.h).
+    const uint64_t k0 = static_cast<uint64_t>(packed[0]);
+    const uint64_t k1 = static_cast<uint64_t>(packed[1]);
+    const uint32_t i0 = simd::ctz(mask), i1 = simd::ctz(rest);
+    prefetch(k0 > k1 ? i0 : i1);
+    stack[sp++] = std::max(k0, k1);
+    return key_ref(std::min(k0, k1));
+  }
+  // Three or more: sort by distance, push all but the nearest.
+  const int k = simd::popcount(mask);
+  const uint64_t least = nearest();
+  packed = k <= 4 ? sort4x2_descending(packed) : sort8_descending(packed);
+  _mm512_storeu_si512(stack + sp, packed);
+  for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
+  sp += k - 1;
+  return key_ref(least);
+}
+#endif
+
 // The same for closest hit: two children are ordered by one comparison,
 // three or more sorted by distance (sort_network.h) and pushed so the
 // nearest is on top; returns the nearest. `refs` are the references pushed
@@ -445,43 +477,21 @@ template <int N, bool kScalar = false, typename Prefetch>
                                                         uint64_t* stack, int& sp, Prefetch&& prefetch) {
 #if defined(RAYLAB_SIMD_AVX512)
   if constexpr (N == 8 && !kScalar) {
-    // All eight keys in one register. The next node's reference comes out of
-    // registers (two compressed lanes, or a reduction beside the sorting
-    // network), never from a store and its reload, which sat on the path
-    // from one node to the next: +5 to +6 % closest-hit Mrays/s (session 13
-    // of docs/bvh-speed.md).
+    // All eight keys in one register; the nearest of three or more by the
+    // reduction over them, beside the compression and the network.
     const __m256i bits = _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256());
     // Zero-masking forms: see sort_network.h on GCC 12's -Wuninitialized.
     const __m512i keys = _mm512_or_si512(
         _mm512_maskz_slli_epi64(0xFF, _mm512_maskz_cvtepu32_epi64(0xFF, bits), 32),
         _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(refs)),
                                                              _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
-    __m512i sorted = _mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys);
-    const uint32_t rest = mask & (mask - 1);
-    if ((rest & (rest - 1)) == 0) {
-      // Two children: order their keys with min/max (no branch to mispredict).
-      // Vector subscripts (GCC, Clang): _mm512_castsi512_si128 warns (sort_network.h).
-      const uint64_t k0 = static_cast<uint64_t>(sorted[0]);
-      const uint64_t k1 = static_cast<uint64_t>(sorted[1]);
-      const uint32_t i0 = simd::ctz(mask), i1 = simd::ctz(rest);
-      prefetch(k0 > k1 ? i0 : i1);
-      stack[sp++] = std::max(k0, k1);
-      return key_ref(std::min(k0, k1));
-    }
-    // Three or more: sort by distance, push all but the nearest.
-    const int k = simd::popcount(mask);
-    const uint64_t nearest = min_key(keys, static_cast<__mmask8>(mask));
-    sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
-    _mm512_storeu_si512(stack + sp, sorted);
-    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-    sp += k - 1;
-    return key_ref(nearest);
+    return push_packed_keys(_mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys), mask,
+                            [&] { return min_key(keys, static_cast<__mmask8>(mask)); }, stack, sp, prefetch);
   }
   if constexpr (N == 16 && !kScalar) {
     // Sixteen keys in two registers (slots 0..7 and 8..15). Up to eight hit
-    // children are compressed into one register and take the 8-wide path's
-    // steps: the nearest of two by min/max, of more by the reduction beside
-    // the network. More than eight: both halves stored and sorted in place.
+    // children are packed into one register and take the 8-wide step; more
+    // than eight: both halves stored and sorted in place.
     const __m512i bits = _mm512_maskz_max_epi32(0xFFFF, _mm512_castps_si512(tnear.v), _mm512_setzero_si512());
     const __m512i refx = _mm512_xor_si512(_mm512_loadu_si512(refs), _mm512_set1_epi32(static_cast<int>(kKeyRefFlip)));
     const auto keys_of = [](__m256i b, __m256i r) {  // 8 x (distance bits << 32 | flipped ref)
@@ -495,25 +505,11 @@ template <int N, bool kScalar = false, typename Prefetch>
     const int k = simd::popcount(mask);
     const __m512i clo = _mm512_maskz_compress_epi64(mlo, klo);
     const __m512i chi = _mm512_maskz_compress_epi64(mhi, khi);
-    const uint32_t rest = mask & (mask - 1);
     if (k <= 8) {
       // The hit keys of slots 8..15 into lanes nlo..k-1, after those of slots 0..7.
-      const __mmask8 upper = static_cast<__mmask8>(((1u << k) - 1u) & ~((1u << nlo) - 1u));
-      __m512i sorted = _mm512_mask_expand_epi64(clo, upper, chi);
-      if ((rest & (rest - 1)) == 0) {
-        const uint64_t k0 = static_cast<uint64_t>(sorted[0]);
-        const uint64_t k1 = static_cast<uint64_t>(sorted[1]);
-        const uint32_t i0 = simd::ctz(mask), i1 = simd::ctz(rest);
-        prefetch(k0 > k1 ? i0 : i1);
-        stack[sp++] = std::max(k0, k1);
-        return key_ref(std::min(k0, k1));
-      }
-      const uint64_t nearest = min_key(sorted, static_cast<__mmask8>((1u << k) - 1u));
-      sorted = k <= 4 ? sort4x2_descending(sorted) : sort8_descending(sorted);
-      _mm512_storeu_si512(stack + sp, sorted);
-      for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-      sp += k - 1;
-      return key_ref(nearest);
+      const __mmask8 valid = static_cast<__mmask8>((1u << k) - 1u);
+      const __m512i packed = _mm512_mask_expand_epi64(clo, static_cast<__mmask8>(valid & ~((1u << nlo) - 1u)), chi);
+      return push_packed_keys(packed, mask, [&] { return min_key(packed, valid); }, stack, sp, prefetch);
     }
     _mm512_storeu_si512(stack + sp, clo);
     _mm512_storeu_si512(stack + sp + nlo, chi);
