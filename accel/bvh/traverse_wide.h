@@ -501,7 +501,7 @@ template <int N, bool kScalar = false, typename Prefetch>
     const __m512i klo = keys_of(_mm512_maskz_extracti64x4_epi64(0xF, bits, 0), _mm512_maskz_extracti64x4_epi64(0xF, refx, 0));
     const __m512i khi = keys_of(_mm512_maskz_extracti64x4_epi64(0xF, bits, 1), _mm512_maskz_extracti64x4_epi64(0xF, refx, 1));
     const __mmask8 mlo = static_cast<__mmask8>(mask & 0xFF), mhi = static_cast<__mmask8>(mask >> 8);
-    const int nlo = simd::popcount(mlo & 0xFFu);
+    const int nlo = simd::popcount(mlo);
     const int k = simd::popcount(mask);
     const __m512i clo = _mm512_maskz_compress_epi64(mlo, klo);
     const __m512i chi = _mm512_maskz_compress_epi64(mhi, khi);
