@@ -54,13 +54,13 @@ struct BvhConfig {
   int leaf = 16;              // max references per leaf (auto: bvh2 4, wide 2 blocks)
   int block = 8;              // triangles per SIMD block
   int bins = 64;
-  int binary_leaf = 4;        // ranges this small become binary leaves without SAH test (auto: 1 with opt=reinsert)
+  int binary_leaf = 3;        // ranges this small become binary leaves without SAH test (auto: light 3, reinsert 1, none 4)
   float alpha = 1e-5f;        // SBVH overlap threshold
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
   int spatial_bins = 32;      // SBVH: slabs per axis
-  int opt_rounds = 1;         // reinsertion rounds (work, not time; auto: light 1, reinsert 32)
-  double opt_batch = 0.02;    // reinsertion: nodes considered per round, a fraction of all nodes (auto: light 0.02, reinsert 0.15)
+  int opt_rounds = 4;         // reinsertion rounds (work, not time; auto: light 4, reinsert 32)
+  double opt_batch = 0.005;   // reinsertion: nodes considered per round, a fraction of all nodes (auto: light 0.005, reinsert 0.15)
   float node_cost = 2.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
@@ -378,8 +378,8 @@ AcceleratorInfo bvh_accelerator_info() {
         "instruction per plane; single rays, block=8, node=f32) or auto (bvh16 where the kernel is AVX-512 "
         "and the spec allows it, else bvh8)",
         one_of({"auto", "bvh2", "bvh4", "bvh8", "bvh16"})},
-       {"opt", "light", "post-build optimisation: none, light (one reinsertion round over the worst 2 % of the nodes, "
-        "4-triangle binary leaves; the default) or reinsert (up to 32 rounds over 15 %, single-triangle leaves; the "
+       {"opt", "light", "post-build optimisation: none, light (four reinsertion rounds over the worst 0.5 % of the nodes, "
+        "3-triangle binary leaves; the default) or reinsert (up to 32 rounds over 15 %, single-triangle leaves; the "
         "high-quality preset)",
         one_of({"none", "light", "reinsert"})},
        {"leaf", "auto", "max triangles per leaf (auto = layout default: bvh2 4, wide 2 blocks)",
@@ -387,7 +387,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"block", "8", "wide layouts: triangles per SIMD test block (4, 8 or 16)", integer_of({4, 8, 16})},
        {"bins", "64", "SAH bins per axis for nodes of 1024 references or more (fewer below: 8 under 128, 16 under 1024), 2..256", integer_in(2, 256)},
        {"bleaf", "auto", "binary tree: ranges of at most this many triangles become leaves before the collapse "
-        "(auto: 1 with opt=reinsert, which moves leaves whole, else 4)",
+        "(auto: 1 with opt=reinsert, which moves leaves whole, 3 with opt=light, 4 with opt=none)",
         integer_in(1, 16).or_word("auto")},
        {"alpha", "1e-5", "sbvh: try spatial splits when children overlap more than alpha * root area",
         real_in(0, kUnbounded).as_float()},
@@ -395,11 +395,11 @@ AcceleratorInfo bvh_accelerator_info() {
        {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references",
         integer_in(0, kUnbounded)},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)", integer_in(2, 256)},
-       {"opt_rounds", "auto", "reinsertion: at most this many rounds (auto: light 1, reinsert 32; work-bounded: the tree "
+       {"opt_rounds", "auto", "reinsertion: at most this many rounds (auto: light 4, reinsert 32; work-bounded: the tree "
         "does not depend on machine load)",
         integer_in(0, 1000).or_word("auto")},
        {"opt_batch", "auto", "reinsertion: nodes considered per round, a fraction of all nodes, the worst by Bittner's "
-        "measure (auto: light 0.02, reinsert 0.15)",
+        "measure (auto: light 0.005, reinsert 0.15)",
         real_in(0, 1, Ends::OpenLow).or_word("auto")},
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
@@ -426,10 +426,15 @@ AcceleratorInfo bvh_accelerator_info() {
                    : l == "bvh4"  ? LayoutKind::Bvh4
                    : l == "bvh16" ? LayoutKind::Bvh16
                                   : LayoutKind::Bvh8;
-        // opt=light (the default since session 8 of docs/bvh-speed.md): one
-        // round over the worst 2 % of the nodes gains 2-5 % on every ray set
-        // of the interior views for about 10 % more build time; the full
-        // reinsertion is the preset (8 % more, at 5-35x Embree's build).
+        // opt=light, the default: four rounds over the worst 0.5 % of the
+        // nodes of a tree with leaves of up to 3 triangles. A few rounds of
+        // small batches move the few badly placed subtrees that cost
+        // incoherent rays most (large triangles deep in the tree; each round
+        // re-ranks after the last one's moves), and leaves of 3 instead of 4
+        // let them move alone: +20 % on shadow rays, +6 % random, +3 %
+        // diffuse over one round of 2 % on 4-triangle leaves, for a build
+        // still under Embree's (docs/bvh-speed.md, session 16). The full
+        // reinsertion is the preset (32 rounds over 15 %, at 5-35x Embree's build).
         const std::string& opt = p.str("opt");
         const bool light = opt == "light", full = opt == "reinsert";
         c.reinsert = light || full;
@@ -443,11 +448,11 @@ AcceleratorInfo bvh_accelerator_info() {
         // every triangle (+4 % over bleaf=4 on the interior views, all four
         // ray sets; docs/bvh-speed.md, session 6). The collapse merges them
         // into wide leaves afterwards either way.
-        c.binary_leaf = p.str("bleaf") == "auto" ? (full ? 1 : 4) : p.integer("bleaf");
+        c.binary_leaf = p.str("bleaf") == "auto" ? (full ? 1 : light ? 3 : 4) : p.integer("bleaf");
         c.alpha = static_cast<float>(p.real("alpha"));
         c.split_budget = static_cast<float>(p.real("sbudget"));
-        c.opt_rounds = p.str("opt_rounds") == "auto" ? (light ? 1 : 32) : p.integer("opt_rounds");
-        c.opt_batch = p.str("opt_batch") == "auto" ? (light ? 0.02 : 0.15) : p.real("opt_batch");
+        c.opt_rounds = p.str("opt_rounds") == "auto" ? (light ? 4 : 32) : p.integer("opt_rounds");
+        c.opt_batch = p.str("opt_batch") == "auto" ? (light ? 0.005 : 0.15) : p.real("opt_batch");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
         c.node_cost = static_cast<float>(p.real("ct"));

@@ -1,5 +1,7 @@
 #include "accel/bvh/collapse_wide.h"
 
+#include "accel/bvh/huge_page_allocator.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -27,9 +29,10 @@ class Collapser {
     counts_ = subtree_ref_counts(tree.nodes);
     // Not initialised: solve() writes every entry of every node it reaches
     // before any is read (N per node: filling them first was a measurable
-    // share of a 16-wide collapse).
-    cost_ = std::make_unique_for_overwrite<float[]>(tree.nodes.size() * n_);
-    choice_ = std::make_unique_for_overwrite<uint8_t[]>(tree.nodes.size() * n_);
+    // share of a 16-wide collapse); on huge pages, as first touching them
+    // page by page was another.
+    cost_ = HugePageBuffer<float>(tree.nodes.size() * n_);
+    choice_ = HugePageBuffer<uint8_t>(tree.nodes.size() * n_);
     inner_split_.assign(tree.nodes.size(), 0);
     slots_.assign(tree.nodes.size(), 1);
   }
@@ -140,35 +143,36 @@ class Collapser {
     float d[kMaxWideWidth + 1];
     uint8_t dk[kMaxWideWidth + 1];
     for (int i = 2; i <= sn; ++i) {
-      d[i] = kInf;
-      dk[i] = 1;
+      float best = kInf;
+      uint8_t best_k = 1;
       for (int k = std::max(1, i - sr), k_end = std::min(i - 1, sl); k <= k_end; ++k) {
         const float v = cl[k - 1] + cr[i - k - 1];
-        if (v < d[i]) {
-          d[i] = v;
-          dk[i] = static_cast<uint8_t>(k);
-        }
+        const bool better = v < best;
+        best = better ? v : best;
+        best_k = better ? static_cast<uint8_t>(k) : best_k;
       }
+      d[i] = best;
+      dk[i] = best_k;
     }
-    for (int i = sn + 1; i <= n_; ++i) {
-      d[i] = d[sn];
-      dk[i] = dk[sn];
-    }
+    // D(n, i) = D(n, sn) for i > sn, so C(n, i) = C(n, sn) there with the
+    // choice "fewer slots" (0): a running minimum up to sn, then a fill.
     const float area = node.bounds().half_area();
     const float as_leaf = leaf_cost(n, false);
-    const float as_inner = area * opt_.node_cost + d[n_];
-    c[0] = std::min(as_leaf, as_inner);
+    const float as_inner = area * opt_.node_cost + d[sn];
+    float run = std::min(as_leaf, as_inner);
+    c[0] = run;
     ch[0] = as_leaf <= as_inner ? 0 : 1;
-    for (int i = 2; i <= n_; ++i) {
-      if (c[i - 2] <= d[i]) {
-        c[i - 1] = c[i - 2];
-        ch[i - 1] = 0;
-      } else {
-        c[i - 1] = d[i];
-        ch[i - 1] = dk[i];
-      }
+    for (int i = 2; i <= sn; ++i) {  // branch-free: the comparison is data-dependent
+      const bool keep = run <= d[i];
+      run = keep ? run : d[i];
+      c[i - 1] = run;
+      ch[i - 1] = keep ? uint8_t{0} : dk[i];
     }
-    inner_split_[n] = dk[n_];
+    for (int i = sn; i < n_; ++i) {
+      c[i] = run;
+      ch[i] = 0;
+    }
+    inner_split_[n] = dk[sn];
   }
 
   // The binary nodes that become the child slots when n gets i slots.
@@ -212,8 +216,8 @@ class Collapser {
   CollapseOptions opt_;
   int n_;
   std::vector<uint32_t> counts_;
-  std::unique_ptr<float[]> cost_;
-  std::unique_ptr<uint8_t[]> choice_;  // per (node, i): see file comment
+  HugePageBuffer<float> cost_;
+  HugePageBuffer<uint8_t> choice_;  // per (node, i): see file comment
   std::vector<uint8_t> inner_split_; // k of D(n, N)
   std::vector<uint8_t> slots_;       // min(N, binary leaves of the subtree): the most slots it can fill
   mutable std::vector<uint32_t> gather_stack_;

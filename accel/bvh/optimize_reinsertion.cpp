@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <queue>
 
@@ -11,6 +12,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
+#include "accel/bvh/huge_page_allocator.h"
 #include "base/timer.h"
 
 namespace raylab {
@@ -18,6 +20,15 @@ namespace raylab {
 namespace {
 
 constexpr uint32_t kNone = 0xFFFFFFFFu;
+
+// A non-negative float's bits order like the float (NaN and negatives, which
+// the measure never gives, map to 0: never a candidate).
+uint32_t order_key(float v) {
+  if (!(v > 0.0f)) return 0;
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  return bits;
+}
 
 struct Move {
   uint32_t node = kNone, target = kNone, parent = kNone;
@@ -31,11 +42,17 @@ class Reinserter {
     parent_.assign(m, kNone);
     child_[0].assign(m, kNone);
     child_[1].assign(m, kNone);
-    box_.resize(m);
+    box_ = HugePageBuffer<Box4>(m);  // every entry written below
+    area_.resize(m);
+    weight_.resize(m);
     touched_.assign(m, 0);
     for (size_t i = 0; i < m; ++i) {
       const Bvh2Node& n = t.nodes[i];
       box_[i] = Box4::from(n.bounds());
+      area_[i] = box_[i].half_area();
+      // A node stays a leaf or an inner node through every move, so its
+      // weight in the SAH sum is fixed.
+      weight_[i] = n.count != 0 || n.index == 0 ? kSahReportIntersectionCost * n.count : kSahReportTraversalCost;
       if (n.count == 0 && n.index != 0) {
         child_[0][i] = n.index;
         child_[1][i] = n.index + 1;
@@ -53,25 +70,23 @@ class Reinserter {
     size_t moves = 0;
     if (m >= 7) {
       const size_t batch = std::max<size_t>(64, static_cast<size_t>(opt_.batch_fraction * static_cast<double>(m)));
-      std::vector<std::pair<float, uint32_t>> measure(m);
+      std::vector<uint32_t> measure(m), worst;
       std::vector<Move> found;
       for (; rounds < opt_.max_rounds; ++rounds) {
         // Candidates: the worst nodes by Bittner's combined measure.
         tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t i = r.begin(); i < r.end(); ++i) measure[i] = {inefficiency(static_cast<uint32_t>(i)), static_cast<uint32_t>(i)};
+          for (size_t i = r.begin(); i < r.end(); ++i) measure[i] = order_key(inefficiency(static_cast<uint32_t>(i)));
         });
-        const size_t k = std::min(batch, m);
-        std::nth_element(measure.begin(), measure.begin() + (k - 1), measure.end(),
-                         [](const auto& a, const auto& b) { return a.first > b.first; });
-        found.assign(k, Move{});
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, k, 64), [&](const tbb::blocked_range<size_t>& r) {
+        select_largest_keys(measure, std::min(batch, m), worst);
+        found.assign(worst.size(), Move{});
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, worst.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
           Scratch& sc = scratch_.local();
-          for (size_t i = r.begin(); i < r.end(); ++i)
-            if (measure[i].first > 0.0f) found[i] = search(measure[i].second, sc);
+          for (size_t i = r.begin(); i < r.end(); ++i) found[i] = search(worst[i], sc);
         });
         found.erase(std::remove_if(found.begin(), found.end(), [](const Move& mv) { return !(mv.gain > 0.0f); }),
                     found.end());
-        std::sort(found.begin(), found.end(), [](const Move& a, const Move& b) { return a.gain > b.gain; });
+        std::sort(found.begin(), found.end(),
+                  [](const Move& a, const Move& b) { return a.gain != b.gain ? a.gain > b.gain : a.node < b.node; });
         std::fill(touched_.begin(), touched_.end(), 0);
         size_t applied = 0;
         for (const Move& mv : found) applied += apply(mv);
@@ -115,9 +130,9 @@ class Reinserter {
   float inefficiency(uint32_t n) const {
     const uint32_t p = parent_[n];
     if (p == kNone || p == root_) return 0.0f;
-    const float a = box_[n].half_area();
+    const float a = area_[n];
     if (is_leaf(n)) return a;
-    const float al = box_[child_[0][n]].half_area(), ar = box_[child_[1][n]].half_area();
+    const float al = area_[child_[0][n]], ar = area_[child_[1][n]];
     const float mean = std::max(0.5f * (al + ar), 1e-30f), mn = std::max(std::min(al, ar), 1e-30f);
     return a * (a / mean) * (a / mn);
   }
@@ -127,15 +142,11 @@ class Reinserter {
     const double total = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, m, 8192), 0.0,
         [&](const tbb::blocked_range<size_t>& r, double acc) {
-          for (size_t i = r.begin(); i < r.end(); ++i) {
-            const double a = box_[i].half_area();
-            acc += is_leaf(static_cast<uint32_t>(i)) ? kSahReportIntersectionCost * a * in_.nodes[i].count
-                                                      : kSahReportTraversalCost * a;
-          }
+          for (size_t i = r.begin(); i < r.end(); ++i) acc += static_cast<double>(area_[i]) * weight_[i];
           return acc;
         },
         std::plus<double>());
-    const double root_area = box_[root_].half_area();
+    const double root_area = area_[root_];
     return root_area > 0.0 ? total / root_area : 0.0;
   }
 
@@ -157,13 +168,13 @@ class Reinserter {
     }
     // Removing n and p: p's ancestors shrink to the boxes they would have.
     sc.boxes.clear();
-    float removed = box_[p].half_area();
+    float removed = area_[p];
     Box4 cb = box_[s];
     uint32_t prev = p;
     for (uint32_t y = parent_[p]; y != kNone; prev = y, y = parent_[y]) {
       const uint32_t other = child_[0][y] == prev ? child_[1][y] : child_[0][y];
       const Box4 nb = merge(cb, box_[other]);
-      removed += box_[y].half_area() - nb.half_area();
+      removed += area_[y] - nb.half_area();
       sc.stamp[y] = sc.id;
       sc.alt[y] = static_cast<uint32_t>(sc.boxes.size());
       sc.boxes.push_back(nb);
@@ -212,7 +223,10 @@ class Reinserter {
     else child_[1][parent] = new_child;
   }
   void refit(uint32_t y) {
-    for (; y != kNone; y = parent_[y]) box_[y] = merge(box_[child_[0][y]], box_[child_[1][y]]);
+    for (; y != kNone; y = parent_[y]) {
+      box_[y] = merge(box_[child_[0][y]], box_[child_[1][y]]);
+      area_[y] = box_[y].half_area();
+    }
   }
 
   bool apply(const Move& mv) {
@@ -242,6 +256,7 @@ class Reinserter {
     parent_[x] = p;
     parent_[n] = p;
     box_[p] = merge(box_[x], box_[n]);
+    area_[p] = box_[p].half_area();
     refit(q2);
     for (uint32_t v : {n, p, s, g, x, q2})
       if (v != kNone) touched_[v] = 1;
@@ -287,13 +302,54 @@ class Reinserter {
   const BinaryBvh& in_;
   ReinsertionOptions opt_;
   std::vector<uint32_t> parent_, child_[2];
-  std::vector<Box4> box_;
+  HugePageBuffer<Box4> box_;
+  std::vector<float> area_;    // box_[i].half_area(), kept with the boxes
+  std::vector<float> weight_;  // the node's factor in the SAH sum (leaf: Ci * count, inner: Ct)
   std::vector<uint8_t> touched_;
   uint32_t root_ = 0;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 
 }  // namespace
+
+// A histogram of the keys' top bits finds the bucket holding the k-th
+// largest, so only that bucket is ordered: two linear passes instead of a
+// selection over all nodes, which dominated a light pass's time (perf:
+// nth_element was most of optimize_reinsertion's own time).
+void select_largest_keys(const std::vector<uint32_t>& keys, size_t k, std::vector<uint32_t>& out) {
+  constexpr int kShift = 20;  // 2^12 buckets: sign, exponent, three mantissa bits
+  constexpr size_t kBuckets = size_t{1} << (32 - kShift);
+  out.clear();
+  if (k == 0) return;
+  std::vector<uint32_t> count(kBuckets, 0);
+  for (uint32_t key : keys)
+    if (key) ++count[key >> kShift];
+  size_t above = 0, cut = 0;
+  for (size_t b = kBuckets; b-- > 1;) {
+    if (above + count[b] >= k) {
+      cut = b;
+      break;
+    }
+    above += count[b];
+  }
+  std::vector<uint32_t> tie;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    const uint32_t key = keys[i];
+    if (!key) continue;
+    const size_t b = key >> kShift;
+    if (b > cut) out.push_back(static_cast<uint32_t>(i));
+    else if (b == cut) tie.push_back(static_cast<uint32_t>(i));
+  }
+  if (out.size() + tie.size() <= k) {  // no more than k non-zero keys: take them all
+    out.insert(out.end(), tie.begin(), tie.end());
+    return;
+  }
+  const size_t take = k - out.size();
+  auto larger = [&](uint32_t a, uint32_t b) { return keys[a] != keys[b] ? keys[a] > keys[b] : a < b; };
+  std::nth_element(tie.begin(), tie.begin() + static_cast<std::ptrdiff_t>(take - 1), tie.end(), larger);
+  out.insert(out.end(), tie.begin(), tie.begin() + static_cast<std::ptrdiff_t>(take));
+}
+
 
 BinaryBvh optimize_reinsertion(const BinaryBvh& tree, const ReinsertionOptions& options, ReinsertionStats* stats) {
   if (tree.nodes.size() < 3) {

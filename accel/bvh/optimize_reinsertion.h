@@ -36,6 +36,11 @@ struct ReinsertionStats {
   double ms = 0.0;
 };
 
+// The candidates of a round: the indices of the (at most) k largest non-zero
+// keys, ties broken by the lower index, in no particular order. Keys are the
+// measure's float bits (which order like non-negative floats; 0: never).
+void select_largest_keys(const std::vector<uint32_t>& keys, size_t k, std::vector<uint32_t>& out);
+
 BinaryBvh optimize_reinsertion(const BinaryBvh& tree, const ReinsertionOptions& options,
                                ReinsertionStats* stats = nullptr);
 
