@@ -887,6 +887,38 @@ TEST(BvhReinsertion, LightDefaultIsFourRoundsOverHalfAPercent) {
     EXPECT_THROW(make_accelerator(bad), SpecError) << bad;
 }
 
+// Each round re-measures only the nodes the last round's moves changed
+// (relinked, refit, or all when the root moved): the same trees as
+// measuring every node every round, on meshes, builders and batch sizes
+// where many rounds apply many moves.
+TEST(BvhReinsertion, IncrementalMeasureGivesTheSameTree) {
+  const test::NamedMesh soup = test::soup(4000, 11), big = test::soup(1500, 4, 6.0f);
+  for (const TriangleMesh* m : {&soup.mesh, &big.mesh})
+    for (const char* b : {"binned", "lbvh"})
+      for (double batch : {0.005, 0.05, 0.3}) {
+        const Prims p = prims_of(*m);
+        BuildOptions bo;
+        bo.leaf_threshold = 2;
+        const BinaryBvh base = std::string(b) == "lbvh" ? build_lbvh(p.boxes, p.centroids)
+                                                         : build_binned_sah(p.boxes, p.centroids, bo);
+        ReinsertionOptions fast, full;
+        fast.max_rounds = full.max_rounds = 12;
+        fast.batch_fraction = full.batch_fraction = batch;
+        fast.min_gain = full.min_gain = 0.0;
+        full.remeasure_all = true;
+        ReinsertionStats sf, sa;
+        const BinaryBvh a = optimize_reinsertion(base, fast, &sf), c = optimize_reinsertion(base, full, &sa);
+        SCOPED_TRACE(fmt::format("{} batch {}", b, batch));
+        if (batch >= 0.05) EXPECT_GT(sf.moves, 0u);
+        EXPECT_EQ(sf.moves, sa.moves);
+        EXPECT_EQ(sf.rounds, sa.rounds);
+        ASSERT_EQ(a.nodes.size(), c.nodes.size());
+        EXPECT_EQ(a.prim_ids, c.prim_ids);
+        for (size_t i = 0; i < a.nodes.size(); ++i)
+          EXPECT_EQ(std::memcmp(&a.nodes[i], &c.nodes[i], sizeof(Bvh2Node)), 0) << "node " << i;
+      }
+}
+
 // A round's candidates: the k largest non-zero keys, ties by the lower
 // index, as a full sort would pick them, with keys spread over many
 // histogram buckets, crowded into one, tiny (below the histogram's first

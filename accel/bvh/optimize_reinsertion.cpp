@@ -46,6 +46,7 @@ class Reinserter {
     area_.resize(m);
     weight_.resize(m);
     touched_.assign(m, 0);
+    is_dirty_.assign(m, 0);
     for (size_t i = 0; i < m; ++i) {
       const Bvh2Node& n = t.nodes[i];
       box_[i] = Box4::from(n.bounds());
@@ -73,10 +74,21 @@ class Reinserter {
       std::vector<uint32_t> measure(m), worst;
       std::vector<Move> found;
       for (; rounds < opt_.max_rounds; ++rounds) {
-        // Candidates: the worst nodes by Bittner's combined measure.
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t i = r.begin(); i < r.end(); ++i) measure[i] = order_key(inefficiency(static_cast<uint32_t>(i)));
-        });
+        // Candidates: the worst nodes by Bittner's combined measure, all of
+        // them in the first round (or after the root moved), then only the
+        // ones the last round's moves changed: a light pass's rounds touch
+        // a few thousand of the nodes, and measuring all of them every round
+        // cost as much as the searches.
+        if (all_dirty_ || opt_.remeasure_all) {
+          tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i < r.end(); ++i) measure[i] = order_key(inefficiency(static_cast<uint32_t>(i)));
+          });
+          all_dirty_ = false;
+        } else {
+          for (uint32_t v : dirty_) measure[v] = order_key(inefficiency(v));
+        }
+        for (uint32_t v : dirty_) is_dirty_[v] = 0;
+        dirty_.clear();
         select_largest_keys(measure, std::min(batch, m), worst);
         found.assign(worst.size(), Move{});
         tbb::parallel_for(tbb::blocked_range<size_t>(0, worst.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
@@ -226,6 +238,16 @@ class Reinserter {
     for (; y != kNone; y = parent_[y]) {
       box_[y] = merge(box_[child_[0][y]], box_[child_[1][y]]);
       area_[y] = box_[y].half_area();
+      mark_dirty(y);
+    }
+  }
+  // A node's measure depends on its area, its children's areas and whether
+  // its parent is the root: a move changes it for the nodes it relinks and
+  // for those refit (whose parents are refit too), or for all when the root changes.
+  void mark_dirty(uint32_t v) {
+    if (v != kNone && !is_dirty_[v]) {
+      is_dirty_[v] = 1;
+      dirty_.push_back(v);
     }
   }
 
@@ -247,6 +269,7 @@ class Reinserter {
     if (q2 == kNone) {
       root_ = p;
       parent_[p] = kNone;
+      all_dirty_ = true;
     } else {
       replace_child(q2, x, p);
       parent_[p] = q2;
@@ -259,22 +282,29 @@ class Reinserter {
     area_[p] = box_[p].half_area();
     refit(q2);
     for (uint32_t v : {n, p, s, g, x, q2})
-      if (v != kNone) touched_[v] = 1;
+      if (v != kNone) {
+        touched_[v] = 1;
+        mark_dirty(v);
+      }
     return true;
   }
 
   // Depth-first re-layout into the canonical format; false when too deep.
+  // Moves keep the node and reference counts, so both arrays are sized once
+  // and filled by index (growing them node by node was most of the pass's
+  // own time outside the searches on a light pass).
   bool relayout(BinaryBvh& out) const {
-    out.nodes.clear();
-    out.prim_ids.clear();
-    out.nodes.reserve(in_.nodes.size());
-    out.prim_ids.reserve(in_.prim_ids.size());
-    out.nodes.emplace_back();
+    out.nodes.resize(in_.nodes.size());
+    out.prim_ids.resize(in_.prim_ids.size());
     struct Item {
       uint32_t node, slot;
       int depth;
     };
-    std::vector<Item> stack{{root_, 0u, 0}};
+    std::vector<Item> stack;
+    stack.reserve(2 * kMaxTreeDepth + 4);
+    stack.push_back({root_, 0u, 0});
+    uint32_t next = 1;
+    size_t prims = 0;
     while (!stack.empty()) {
       const Item it = stack.back();
       stack.pop_back();
@@ -283,19 +313,20 @@ class Reinserter {
       dst.set_bounds(box_[it.node].aabb());
       if (is_leaf(it.node)) {
         const Bvh2Node& src = in_.nodes[it.node];
-        dst.index = static_cast<uint32_t>(out.prim_ids.size());
+        dst.index = static_cast<uint32_t>(prims);
         dst.count = src.count;
-        out.prim_ids.insert(out.prim_ids.end(), in_.prim_ids.begin() + src.index,
-                            in_.prim_ids.begin() + src.index + src.count);
+        std::copy_n(in_.prim_ids.begin() + src.index, src.count, out.prim_ids.begin() + static_cast<std::ptrdiff_t>(prims));
+        prims += src.count;
         continue;
       }
-      const uint32_t first = static_cast<uint32_t>(out.nodes.size());
-      out.nodes[it.slot].index = first;
-      out.nodes[it.slot].count = 0;
-      out.nodes.resize(out.nodes.size() + 2);
-      stack.push_back({child_[1][it.node], first + 1, it.depth + 1});
-      stack.push_back({child_[0][it.node], first, it.depth + 1});
+      dst.index = next;
+      dst.count = 0;
+      stack.push_back({child_[1][it.node], next + 1, it.depth + 1});
+      stack.push_back({child_[0][it.node], next, it.depth + 1});
+      next += 2;
     }
+    out.nodes.resize(next);  // the same sizes unless the input held unreachable nodes
+    out.prim_ids.resize(prims);
     return true;
   }
 
@@ -306,6 +337,9 @@ class Reinserter {
   std::vector<float> area_;    // box_[i].half_area(), kept with the boxes
   std::vector<float> weight_;  // the node's factor in the SAH sum (leaf: Ci * count, inner: Ct)
   std::vector<uint8_t> touched_;
+  std::vector<uint8_t> is_dirty_;  // per node: in dirty_
+  std::vector<uint32_t> dirty_;    // nodes whose measure the last round's moves changed
+  bool all_dirty_ = true;
   uint32_t root_ = 0;
   mutable tbb::enumerable_thread_specific<Scratch> scratch_;
 };

@@ -27,6 +27,9 @@ struct ReinsertionOptions {
   int max_rounds = 32;            // 0 leaves the tree unchanged
   double batch_fraction = 0.15;   // nodes considered per round, as a fraction of all nodes
   double min_gain = 2e-4;         // stop when a round improves the SAH cost by less (relative)
+  // Measure every node every round instead of the ones the last round's
+  // moves changed: the same tree, slower (for tests of that equivalence).
+  bool remeasure_all = false;
 };
 
 struct ReinsertionStats {
