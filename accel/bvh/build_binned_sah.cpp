@@ -4,8 +4,11 @@
 #include "accel/bvh/sah_binning.h"
 
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cstdlib>
 #include <limits>
 #include <memory>
@@ -146,12 +149,20 @@ class BinnedBuilder {
     const int n = static_cast<int>(e - b);
     // Centroids per axis as integers that order like the floats (and give
     // any bits, NaN included, a place), so that ranks always form a permutation.
-    int32_t key[3][kSmallSweep];
+    alignas(64) int32_t key[3][kSmallSweep];
     for (int i = 0; i < n; ++i) {
       alignas(16) int32_t v[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(v), _mm_castps_si128(refs[b + i].centroid()));
       for (int a = 0; a < 3; ++a) key[a][i] = v[a] ^ ((v[a] >> 31) & 0x7FFFFFFF);
     }
+#if defined(__AVX512F__)
+    // With AVX-512 the sixteen keys of an axis are one register: a key's rank
+    // is the population count of two comparison masks (padding lanes are
+    // masked off), instead of n scalar comparisons.
+    const __mmask16 valid = static_cast<__mmask16>((1u << n) - 1u);
+    __m512i kv[3];
+    for (int a = 0; a < 3; ++a) kv[a] = _mm512_maskz_loadu_epi32(valid, key[a]);
+#endif
     uint8_t order[3][kSmallSweep];
     Split best;
     float right_area[kSmallSweep];
@@ -161,11 +172,21 @@ class BinnedBuilder {
       // move (perf: the sort was a fifth of the builder's own time).
       uint8_t* o = order[a];
       const int32_t* k = key[a];
+#if defined(__AVX512F__)
+      for (int i = 0; i < n; ++i) {
+        const __m512i ki = _mm512_set1_epi32(k[i]);
+        const __mmask16 before = static_cast<__mmask16>((1u << i) - 1u);  // lanes j < i (all valid)
+        const __mmask16 less = _mm512_mask_cmplt_epi32_mask(valid, kv[a], ki);
+        const __mmask16 tied = _mm512_mask_cmpeq_epi32_mask(before, kv[a], ki);
+        o[std::popcount(static_cast<unsigned>(less | tied))] = static_cast<uint8_t>(i);
+      }
+#else
       for (int i = 0; i < n; ++i) {
         int rank = 0;
         for (int j = 0; j < n; ++j) rank += (k[j] < k[i]) | ((k[j] == k[i]) & (j < i));
         o[rank] = static_cast<uint8_t>(i);
       }
+#endif
       Box4 acc;
       for (int i = n - 1; i > 0; --i) {
         acc.extend(refs[b + o[i]].box);
