@@ -1,9 +1,5 @@
 #include "accel/bvh/build_binned_sah.h"
 
-#include "accel/bvh/huge_page_allocator.h"
-#include "accel/bvh/sah_binning.h"
-
-
 #include <immintrin.h>
 
 #include <algorithm>
@@ -17,6 +13,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
+
+#include "accel/bvh/huge_page_allocator.h"
+#include "accel/bvh/sah_binning.h"
 
 namespace raylab {
 

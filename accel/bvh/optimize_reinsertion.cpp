@@ -4,13 +4,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <queue>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
 
 #include "accel/bvh/huge_page_allocator.h"
 #include "base/timer.h"
@@ -315,7 +313,8 @@ class Reinserter {
         const Bvh2Node& src = in_.nodes[it.node];
         dst.index = static_cast<uint32_t>(prims);
         dst.count = src.count;
-        std::copy_n(in_.prim_ids.begin() + src.index, src.count, out.prim_ids.begin() + static_cast<std::ptrdiff_t>(prims));
+        std::copy_n(in_.prim_ids.begin() + src.index, src.count,
+                    out.prim_ids.begin() + static_cast<std::ptrdiff_t>(prims));
         prims += src.count;
         continue;
       }
