@@ -28,6 +28,7 @@
 #include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/quantized_node.h"
 #include "accel/bvh/bvh2_layout.h"
+#include "accel/bvh/occlusion_order.h"
 #include "accel/bvh/bvh_outline.h"
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/traverse_sphere_bvh.h"
@@ -68,6 +69,7 @@ struct BvhConfig {
   int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 only
   bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
+  bool occlusion_order = false;  // aorder=rtsah: child slots ordered for any-hit walks (occlusion_order.h)
 };
 
 int layout_width(LayoutKind l) {
@@ -214,7 +216,9 @@ class BvhAccel final : public Accelerator {
     co.max_leaf_blocks = co.width == 2 ? 1 << 20 : static_cast<int>(wide_ref::kMaxBlocks);
     co.node_cost = cfg_.node_cost;
     co.block_cost = cfg_.block_cost;
-    const WideTree wide = collapse_to_wide(tree, co);
+    WideTree wide = collapse_to_wide(tree, co);
+    if (cfg_.occlusion_order)
+      s.extra["occlusion_root"] = order_children_for_occlusion(wide, mesh, {co.node_cost, co.block_cost, co.block_width});
     const WideShape shape = measure_wide(wide);
     s.extra["ms_collapse"] = phase.ms();
     s.extra["avg_leaf_size"] = shape.avg_leaf_size;
@@ -411,6 +415,9 @@ AcceleratorInfo bvh_accelerator_info() {
        {"node", "f32", "bvh8 child boxes: f32 (float planes, 256-byte nodes) or q8 (8-bit planes on a per-node "
         "power-of-two grid, conservative and exactly decoded, 128-byte nodes; single rays, not with packet=16 or simd=0)",
         one_of({"f32", "q8"})},
+       {"aorder", "slot", "any-hit child order: slot (the collapse's, descending) or rtsah (slots ordered by estimated "
+        "occlusion per cost, Ize & Hansen 2011; the same tree and closest hits)",
+        one_of({"slot", "rtsah"})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
@@ -461,6 +468,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.packet = p.integer("packet");
         c.simd = parse_simd(p);
         c.quantized = p.str("node") == "q8";
+        c.occlusion_order = p.str("aorder") == "rtsah";
         // layout=auto: 16-wide nodes where one AVX-512 instruction tests a
         // plane of all sixteen children and nothing in the spec needs 8-wide
         // ones (simd=0 follows, so that it stays the same tree with scalar
@@ -503,6 +511,7 @@ AcceleratorInfo bvh_accelerator_info() {
                 {"opt_ms", "reinsert: ms spent"},
                 {"opt_rounds", "reinsert: rounds run"},
                 {"opt_moves", "reinsert: subtrees moved"},
+                {"occlusion_root", "aorder=rtsah: estimated chance that a random line through the root box is blocked"},
                 {"avg_leaf_size", "mean triangles per leaf"},
                 {"child_fill", "mean children per inner node over the width"},
                 {"simd_bits", "wide layouts: SIMD width of the kernels in bits"},
