@@ -123,7 +123,7 @@ std::vector<std::string> family_specs() {
         "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
         "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0",
-        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert", "bvh:aorder=rtsah,layout=bvh2"})
+        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert"})
     specs.push_back(extra);
   return specs;
 }
@@ -1430,6 +1430,12 @@ TEST(BvhPacket, RejectsBadParameters) {
   EXPECT_THROW(make_accelerator("bvh:packet=16,layout=bvh4"), SpecError);
 }
 
+TEST(BvhOcclusionOrder, NeedsAWideLayout) {
+  EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,layout=bvh2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,bound=sphere"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:aorder=any"), SpecError);
+  EXPECT_NO_THROW(make_accelerator("bvh:aorder=rtsah,layout=bvh4"));
+}
 
 // ---------------------------------------------------------------------------
 // Any-hit order

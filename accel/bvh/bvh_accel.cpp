@@ -415,8 +415,8 @@ AcceleratorInfo bvh_accelerator_info() {
        {"node", "f32", "bvh8 child boxes: f32 (float planes, 256-byte nodes) or q8 (8-bit planes on a per-node "
         "power-of-two grid, conservative and exactly decoded, 128-byte nodes; single rays, not with packet=16 or simd=0)",
         one_of({"f32", "q8"})},
-       {"aorder", "slot", "any-hit child order: slot (the collapse's, descending) or rtsah (slots ordered by estimated "
-        "occlusion per cost, Ize & Hansen 2011; the same tree and closest hits)",
+       {"aorder", "slot", "wide layouts, any-hit child order: slot (the collapse's, descending) or rtsah (slots ordered "
+        "by estimated occlusion per cost, Ize & Hansen 2011; the same tree and closest hits)",
         one_of({"slot", "rtsah"})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
@@ -483,6 +483,9 @@ AcceleratorInfo bvh_accelerator_info() {
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
         if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
+        // The binary walk orders both children by entry distance, any hit too: no slot order to set.
+        if (c.occlusion_order && c.layout == LayoutKind::Bvh2)
+          throw SpecError("bvh: aorder=rtsah needs a wide layout (bvh4, bvh8, bvh16)");
         if (c.layout == LayoutKind::Bvh16 && c.block != 8) throw SpecError("bvh: layout=bvh16 needs block=8");
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");

@@ -46,7 +46,6 @@ double order_children_for_occlusion(WideTree& tree, const TriangleMesh& mesh, co
   // Children have larger indices than their parents (the collapse expands
   // depth first and appends), so a reverse sweep sees children first.
   std::vector<Estimate> inner(tree.nodes.size());
-  Estimate root;
   for (size_t n = tree.nodes.size(); n-- > 0;) {
     WideTree::Node& node = tree.nodes[n];
     Aabb box = Aabb::empty();
@@ -77,9 +76,8 @@ double order_children_for_occlusion(WideTree& tree, const TriangleMesh& mesh, co
     }
     for (int j = 0; j < node.count; ++j) node.child[j] = slots[j].child;
     inner[n] = {1.0 - pass, cost};
-    if (n == 0) root = inner[n];
   }
-  return root.blocked;
+  return inner.empty() ? 0.0 : inner[0].blocked;
 }
 
 }  // namespace raylab
