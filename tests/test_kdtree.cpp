@@ -367,7 +367,9 @@ TEST(KdTreeTraversal, RaysInOnAndAlongSplitPlanes) {
       {"soup", triangle_soup_mesh(1500, 21)},
       {"coplanar", coplanar_mesh(500, 8, 1, 22)},
       {"sphere", make_uv_sphere(32, 16, Vec3f(0.25f, 0.5f, -0.125f), 1.0f)}};
-  for (const auto& [name, mesh] : scenes) {
+  for (const auto& scene : scenes) {
+    const std::string& name = scene.first;  // not a structured binding: clang 14 cannot capture one
+    const TriangleMesh& mesh = scene.second;
     for_each_builder_variant(mesh, [&](const std::string& kind, bool clip, const KdTree& tree) {
         const std::string spec =
             std::string("kdtree:builder=") + kind + ",clip=" + (clip ? "1" : "0");
@@ -629,7 +631,9 @@ TEST(KdTreeBuilder, EveryLeafReachedByATriangleReferencesIt) {
       {"soup", triangle_soup_mesh(2000, 51, 4.0f)},
       {"sphere far away", make_uv_sphere(24, 12, Vec3f(3e4f, 1e4f, -2e4f), 10.0f)},
       {"cornell", cornell()}};
-  for (const auto& [name, mesh] : scenes) {
+  for (const auto& scene : scenes) {
+    const std::string& name = scene.first;  // not a structured binding: clang 14 cannot capture one
+    const TriangleMesh& mesh = scene.second;
     for_each_builder_variant(mesh, [&](const std::string& kind, bool clip, const KdTree& tree) {
         Pcg32 rng(52, 1);
         size_t missing = 0, checked = 0;

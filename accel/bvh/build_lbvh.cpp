@@ -88,15 +88,22 @@ class Lbvh {
           return acc;
         },
         [](const Aabb& a, const Aabb& b) { return merge(a, b); });
-    const Vec3f ext = cb.diagonal();
-    Vec3f scale;
-    for (int a = 0; a < 3; ++a) scale[a] = ext[a] > 0.0f ? 2097151.0f / ext[a] : 0.0f;
+    // In double: centroids spread over more than FLT_MAX (a scene reaching both ends of float)
+    // have an infinite float extent, and (c - lo) * (k / inf) would be inf * 0 = NaN, whose
+    // conversion to an integer is undefined (UBSan's float-cast-overflow found it).
+    double lo[3], scale[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = cb.lo[a];
+      const double ext = double(cb.hi[a]) - lo[a];
+      scale[a] = ext > 0.0 ? 2097151.0 / ext : 0.0;
+    }
     keys_.resize(n_);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_, 8192), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         uint64_t code = 0;
         for (int a = 0; a < 3; ++a) {
-          const float q = std::clamp((centroids_[i][a] - cb.lo[a]) * scale[a], 0.0f, 2097151.0f);
+          const double x = (double(centroids_[i][a]) - lo[a]) * scale[a];
+          const double q = x > 0.0 ? std::min(x, 2097151.0) : 0.0;  // NaN (an infinite centroid) -> 0
           code |= morton_spread21(static_cast<uint32_t>(q)) << (2 - a);
         }
         keys_[i] = Keyed{code, static_cast<uint32_t>(i)};
