@@ -14,6 +14,7 @@
 // No operation here contracts a*b+c implicitly: fmadd() is explicit and only
 // used where the caller has accounted for its rounding (the slab test); the
 // watertight triangle test uses separate mul and sub, like the scalar test.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -78,6 +79,29 @@ inline bool isa_supported_by_cpu() {
 
 inline uint32_t ctz(uint32_t m) { return static_cast<uint32_t>(__builtin_ctz(m)); }
 inline int popcount(uint32_t m) { return __builtin_popcount(m); }
+
+#if defined(__AVX2__)
+// AVX2 has no compress instruction (AVX-512's vpcompress). Its stand-in: a
+// permutation that moves the set lanes of an 8-bit mask to the front in
+// order, from a 1 KiB table of packed 3-bit lane indices (lane i's source in
+// bits 3i..3i+2) and one variable shift; vpermd reads only the low 3 bits of
+// each index. Lanes past the mask's count get lane 0.
+inline constexpr std::array<uint32_t, 256> kCompressIndex8 = [] {
+  std::array<uint32_t, 256> table{};
+  for (uint32_t mask = 0; mask < 256; ++mask) {
+    uint32_t packed = 0;
+    int lane = 0;
+    for (uint32_t i = 0; i < 8; ++i)
+      if ((mask >> i) & 1u) packed |= i << (3 * lane++);
+    table[mask] = packed;
+  }
+  return table;
+}();
+inline __m256i compress_index8(uint32_t mask) {
+  return _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompressIndex8[mask & 0xFFu])),
+                           _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21));
+}
+#endif
 
 // Portable fallback: an array of W floats. Loops are simple enough for the
 // compiler to vectorise with whatever the target offers.

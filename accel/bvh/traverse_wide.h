@@ -525,13 +525,42 @@ template <int N, bool kScalar = false, typename Prefetch>
   const uint32_t rest = mask & (mask - 1);
   const uint32_t i1 = simd::ctz(rest);
   if ((rest & (rest - 1)) == 0) {
-    // Two children: order their keys with min/max (no branch to mispredict).
+    // Two children: ordered by a mask, not a branch (GCC made std::max and
+    // std::min of the keys a compare and a jump here, mispredicted on about
+    // one node in four of incoherent rays: callgrind --branch-sim).
     const uint64_t k0 = child_key(dist[i0], refs[i0]);
     const uint64_t k1 = child_key(dist[i1], refs[i1]);
-    prefetch(k0 > k1 ? i0 : i1);
-    stack[sp++] = std::max(k0, k1);
-    return key_ref(std::min(k0, k1));
+    const uint64_t first_far = 0 - static_cast<uint64_t>(k0 > k1);  // all ones when k0 is the farther
+    const uint64_t far = k1 ^ ((k0 ^ k1) & first_far);
+    prefetch(i1 ^ ((i0 ^ i1) & static_cast<uint32_t>(first_far)));
+    stack[sp++] = far;
+    return key_ref(k0 ^ k1 ^ far);
   }
+#if defined(RAYLAB_SIMD_AVX2) && !defined(RAYLAB_SIMD_AVX512)
+  if constexpr (N == 8 && !kScalar) {
+    // Three or more with AVX2: the hit children's distances and references
+    // packed to the front by one permutation (simd::compress_index8) and
+    // interleaved into 64-bit keys in registers, so no loop over the
+    // children (whose unpredictable trip count mispredicted); then sorted.
+    const int k = simd::popcount(mask);
+    const __m256i perm = simd::compress_index8(mask);
+    const __m256i bits = _mm256_permutevar8x32_epi32(
+        _mm256_max_epi32(_mm256_castps_si256(tnear.v), _mm256_setzero_si256()), perm);
+    const __m256i refx = _mm256_permutevar8x32_epi32(
+        _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(refs)),
+                         _mm256_set1_epi32(static_cast<int>(kKeyRefFlip))),
+        perm);
+    const __m256i lo = _mm256_unpacklo_epi32(refx, bits);  // keys 0 1 | 4 5
+    const __m256i hi = _mm256_unpackhi_epi32(refx, bits);  // keys 2 3 | 6 7
+    uint64_t* keys = stack + sp;  // room for 8 (wide_stack_fits)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys), _mm256_permute2x128_si256(lo, hi, 0x20));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys + 4), _mm256_permute2x128_si256(lo, hi, 0x31));
+    sort8_keys_descending(keys, k);
+    for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
+    sp += k - 1;
+    return key_ref(stack[sp]);
+  }
+#endif
   // Three or more: sort by distance, push all but the nearest.
   const int k = simd::popcount(mask);
   uint64_t* keys = stack + sp;
