@@ -1051,7 +1051,7 @@ TEST(BvhTraversal, SortingNetworkSortsDescending) {
       for (int i = 0; i < n; ++i) keys[i] = ((bits >> i) & 1) ? 5 : 3;
       std::vector<uint64_t> want(keys, keys + n);
       std::sort(want.rbegin(), want.rend());
-      sort8_keys_descending(keys, n);
+      ASSERT_EQ(sort8_keys_descending(keys, n), want[n - 1]) << "the least key is returned";
       for (int i = 0; i < n; ++i) ASSERT_EQ(keys[i], want[i]) << n << " keys, pattern " << bits;
     }
   }
@@ -1062,7 +1062,7 @@ TEST(BvhTraversal, SortingNetworkSortsDescending) {
     for (int i = 0; i < n; ++i) keys[i] = child_key(rng.uniform() * 10.0f - 1.0f, rng.next());
     std::vector<uint64_t> want(keys, keys + n);
     std::sort(want.rbegin(), want.rend());
-    sort8_keys_descending(keys, n);
+    ASSERT_EQ(sort8_keys_descending(keys, n), want[n - 1]);
     for (int i = 0; i < n; ++i) ASSERT_EQ(keys[i], want[i]);
   }
   // Keys order by distance, then leaves before inner nodes; refs survive.

@@ -102,19 +102,21 @@ namespace network_detail {
 #endif
 
 // Sorts n <= 8 keys descending in place, with the vector network when
-// available. keys must have room for 8 entries.
-inline void sort8_keys_descending(uint64_t* keys, int n) {
+// available, and returns the least (keys[n - 1]). keys must have room for 8
+// entries.
+inline uint64_t sort8_keys_descending(uint64_t* keys, int n) {
 #if defined(RAYLAB_SIMD_AVX512)
   const __mmask8 valid = static_cast<__mmask8>((1u << n) - 1u);
   __m512i v = _mm512_maskz_loadu_epi64(valid, keys);
   v = n <= 4 ? sort4x2_descending(v) : sort8_descending(v);
   _mm512_mask_storeu_epi64(keys, valid, v);
+  return keys[n - 1];
 #else
   // Without AVX-512: compare-exchange networks on registers, whose min/max
   // compile to conditional moves: three and four keys by their optimal
-  // networks, five to eight padded with zeros (which sort last) by Batcher's
-  // odd-even merge network for eight (19 exchanges, 6 layers; Knuth, TAOCP
-  // vol. 3, 5.3.4). Incoherent rays' child orders are unpredictable, and the
+  // networks, five to eight by Batcher's odd-even merge network for eight
+  // (19 exchanges, 6 layers; Knuth, TAOCP vol. 3, 5.3.4), padded with zeros,
+  // which sort last. Incoherent rays' child orders are unpredictable, and the
   // insertion sort's branches were the largest source of mispredictions in
   // the closest-hit walk (callgrind --branch-sim, random rays on Sponza).
   // Any sorting method gives the same order of unique keys.
@@ -129,6 +131,7 @@ inline void sort8_keys_descending(uint64_t* keys, int n) {
     exchange(b, c);
     exchange(a, b);
     keys[0] = a, keys[1] = b, keys[2] = c;
+    return c;  // from the register: the walk's next node, not a store's reload
   } else if (n == 4) {
     uint64_t a = keys[0], b = keys[1], c = keys[2], d = keys[3];
     exchange(a, b);
@@ -137,6 +140,7 @@ inline void sort8_keys_descending(uint64_t* keys, int n) {
     exchange(b, d);
     exchange(b, c);
     keys[0] = a, keys[1] = b, keys[2] = c, keys[3] = d;
+    return d;
   } else if (n > 4) {
     uint64_t k[8];
     for (int i = 0; i < 8; ++i) k[i] = i < n ? keys[i] : 0;
@@ -150,6 +154,7 @@ inline void sort8_keys_descending(uint64_t* keys, int n) {
   } else {
     sort_keys_descending(keys, n);
   }
+  return keys[n - 1];
 #endif
 }
 

@@ -555,10 +555,10 @@ template <int N, bool kScalar = false, typename Prefetch>
     uint64_t* keys = stack + sp;  // room for 8 (wide_stack_fits)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys), _mm256_permute2x128_si256(lo, hi, 0x20));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys + 4), _mm256_permute2x128_si256(lo, hi, 0x31));
-    sort8_keys_descending(keys, k);
+    const uint64_t nearest = sort8_keys_descending(keys, k);
     for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
     sp += k - 1;
-    return key_ref(stack[sp]);
+    return key_ref(nearest);
   }
 #endif
   // Three or more: sort by distance, push all but the nearest.
