@@ -370,6 +370,51 @@ struct vfloat<8> {
 };
 #endif
 
+#if defined(RAYLAB_SIMD_AVX2) && !defined(RAYLAB_SIMD_AVX512)
+// Sixteen lanes as two AVX2 halves (lanes 0..7 and 8..15), for the 16-ray
+// packets (traverse_packet.h) and the 16-wide layouts on AVX2 machines. The
+// portable array form had them compiled as scalar loops: `bvh:packet=16` ran
+// at half the single-ray speed on a Zen 3 (docs/bvh-speed.md, session 19).
+// Every operation is the 8-lane one on each half; masks are lo | hi << 8.
+template <>
+struct vfloat<16> {
+  vfloat<8> lo, hi;
+  static vfloat load(const float* p) { return {vfloat<8>::load(p), vfloat<8>::load(p + 8)}; }
+  static vfloat broadcast(float x) {
+    const vfloat<8> h = vfloat<8>::broadcast(x);
+    return {h, h};
+  }
+  void store(float* p) const { lo.store(p), hi.store(p + 8); }
+#define RAYLAB_VF_HALVES(expr) return {[](vfloat<8> a, vfloat<8> b) { return expr; }(x.lo, y.lo), \
+                                       [](vfloat<8> a, vfloat<8> b) { return expr; }(x.hi, y.hi)}
+  friend vfloat operator+(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a + b); }
+  friend vfloat operator-(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a - b); }
+  friend vfloat operator*(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a * b); }
+  friend vfloat operator/(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a / b); }
+  friend vfloat andnot(vfloat x, vfloat y) { RAYLAB_VF_HALVES(andnot(a, b)); }
+  friend vfloat and_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(and_bits(a, b)); }
+  friend vfloat xor_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(xor_bits(a, b)); }
+  friend vfloat min(vfloat x, vfloat y) { RAYLAB_VF_HALVES(min(a, b)); }
+  friend vfloat max(vfloat x, vfloat y) { RAYLAB_VF_HALVES(max(a, b)); }
+  friend vfloat min_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(min_bits(a, b)); }
+  friend vfloat max_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(max_bits(a, b)); }
+#undef RAYLAB_VF_HALVES
+  friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {fmadd(a.lo, b.lo, c.lo), fmadd(a.hi, b.hi, c.hi)}; }
+  friend vfloat add_ulps(vfloat a, int32_t k) { return {add_ulps(a.lo, k), add_ulps(a.hi, k)}; }
+#define RAYLAB_VF_HALVES_MASK(name) \
+  friend uint32_t name(vfloat a, vfloat b) { return name(a.lo, b.lo) | name(a.hi, b.hi) << 8; }
+  RAYLAB_VF_HALVES_MASK(cmp_lt)
+  RAYLAB_VF_HALVES_MASK(cmp_le)
+  RAYLAB_VF_HALVES_MASK(cmp_gt)
+  RAYLAB_VF_HALVES_MASK(cmp_ge)
+  RAYLAB_VF_HALVES_MASK(cmp_eq)
+  RAYLAB_VF_HALVES_MASK(cmp_neq)
+  RAYLAB_VF_HALVES_MASK(cmp_lt_bits)
+#undef RAYLAB_VF_HALVES_MASK
+  friend uint32_t sign_bits(vfloat a) { return sign_bits(a.lo) | sign_bits(a.hi) << 8; }
+};
+#endif
+
 #if defined(RAYLAB_SIMD_AVX512)
 template <>
 struct vfloat<16> {
