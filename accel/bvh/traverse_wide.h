@@ -526,8 +526,8 @@ template <int N, bool kScalar = false, typename Prefetch>
   const uint32_t i1 = simd::ctz(rest);
   if ((rest & (rest - 1)) == 0) {
     // Two children: ordered by a mask, not a branch (GCC made std::max and
-    // std::min of the keys a compare and a jump here, mispredicted on about
-    // one node in four of incoherent rays: callgrind --branch-sim).
+    // std::min of the keys a compare and a jump here, mispredicted about half
+    // the times it ran on incoherent rays: callgrind --branch-sim).
     const uint64_t k0 = child_key(dist[i0], refs[i0]);
     const uint64_t k1 = child_key(dist[i1], refs[i1]);
     const uint64_t first_far = 0 - static_cast<uint64_t>(k0 > k1);  // all ones when k0 is the farther
