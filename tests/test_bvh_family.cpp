@@ -1590,5 +1590,29 @@ TEST(BvhSimd, SixteenLanesComputeWhatEachLaneDefines) {
   EXPECT_EQ(sign_bits(va), mask([&](int i) { return std::signbit(a[i]); }));
 }
 
+#if defined(__AVX2__)
+TEST(BvhSimd, CompressIndexMovesTheMaskedLanesToTheFront) {
+  // The AVX2 stand-in for a compress instruction (the closest-hit child
+  // keys): for every 8-bit mask, lane j of the permutation is the j-th set
+  // bit's lane, in order, and lanes past the count are 0.
+  for (uint32_t mask = 0; mask < 256; ++mask) {
+    alignas(32) int32_t lane[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lane), simd::compress_index8(mask));
+    int j = 0;
+    for (int i = 0; i < 8; ++i)
+      if ((mask >> i) & 1u) {
+        EXPECT_EQ(lane[j] & 7, i) << "mask " << mask << " lane " << j;
+        ++j;
+      }
+    for (; j < 8; ++j) EXPECT_EQ(lane[j] & 7, 0) << "mask " << mask << " lane " << j;
+  }
+  // Bits above 7 are ignored.
+  alignas(32) int32_t a[8], b[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(a), simd::compress_index8(0x1A5u));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(b), simd::compress_index8(0xA5u));
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(a[i] & 7, b[i] & 7) << i;
+}
+#endif
+
 }  // namespace
 }  // namespace raylab

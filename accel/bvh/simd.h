@@ -385,20 +385,20 @@ struct vfloat<16> {
     return {h, h};
   }
   void store(float* p) const { lo.store(p), hi.store(p + 8); }
-#define RAYLAB_VF_HALVES(expr) return {[](vfloat<8> a, vfloat<8> b) { return expr; }(x.lo, y.lo), \
-                                       [](vfloat<8> a, vfloat<8> b) { return expr; }(x.hi, y.hi)}
-  friend vfloat operator+(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a + b); }
-  friend vfloat operator-(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a - b); }
-  friend vfloat operator*(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a * b); }
-  friend vfloat operator/(vfloat x, vfloat y) { RAYLAB_VF_HALVES(a / b); }
-  friend vfloat andnot(vfloat x, vfloat y) { RAYLAB_VF_HALVES(andnot(a, b)); }
-  friend vfloat and_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(and_bits(a, b)); }
-  friend vfloat xor_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(xor_bits(a, b)); }
-  friend vfloat min(vfloat x, vfloat y) { RAYLAB_VF_HALVES(min(a, b)); }
-  friend vfloat max(vfloat x, vfloat y) { RAYLAB_VF_HALVES(max(a, b)); }
-  friend vfloat min_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(min_bits(a, b)); }
-  friend vfloat max_bits(vfloat x, vfloat y) { RAYLAB_VF_HALVES(max_bits(a, b)); }
-#undef RAYLAB_VF_HALVES
+  // One 8-lane operation applied to each half.
+  template <class Op>
+  static vfloat halves(vfloat x, vfloat y, Op op) { return {op(x.lo, y.lo), op(x.hi, y.hi)}; }
+  friend vfloat operator+(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return a + b; }); }
+  friend vfloat operator-(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return a - b; }); }
+  friend vfloat operator*(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return a * b; }); }
+  friend vfloat operator/(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return a / b; }); }
+  friend vfloat andnot(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return andnot(a, b); }); }
+  friend vfloat and_bits(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return and_bits(a, b); }); }
+  friend vfloat xor_bits(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return xor_bits(a, b); }); }
+  friend vfloat min(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return min(a, b); }); }
+  friend vfloat max(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return max(a, b); }); }
+  friend vfloat min_bits(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return min_bits(a, b); }); }
+  friend vfloat max_bits(vfloat x, vfloat y) { return halves(x, y, [](vfloat<8> a, vfloat<8> b) { return max_bits(a, b); }); }
   friend vfloat fmadd(vfloat a, vfloat b, vfloat c) { return {fmadd(a.lo, b.lo, c.lo), fmadd(a.hi, b.hi, c.hi)}; }
   friend vfloat add_ulps(vfloat a, int32_t k) { return {add_ulps(a.lo, k), add_ulps(a.hi, k)}; }
 #define RAYLAB_VF_HALVES_MASK(name) \

@@ -519,12 +519,14 @@ template <int N, bool kScalar = false, typename Prefetch>
     return key_ref(stack[sp]);
   }
 #endif
+  // The distances go through memory only on the paths that read them one by
+  // one (two children; the portable sort), not on the AVX2 permutation's.
   alignas(64) float dist[N];
-  tnear.store(dist);
-  const uint32_t i0 = simd::ctz(mask);
   const uint32_t rest = mask & (mask - 1);
-  const uint32_t i1 = simd::ctz(rest);
   if ((rest & (rest - 1)) == 0) {
+    tnear.store(dist);
+    const uint32_t i0 = simd::ctz(mask);
+    const uint32_t i1 = simd::ctz(rest);
     // Two children: ordered by a mask, not a branch (GCC made std::max and
     // std::min of the keys a compare and a jump here, mispredicted about half
     // the times it ran on incoherent rays: callgrind --branch-sim).
@@ -562,6 +564,7 @@ template <int N, bool kScalar = false, typename Prefetch>
   }
 #endif
   // Three or more: sort by distance, push all but the nearest.
+  tnear.store(dist);
   const int k = simd::popcount(mask);
   uint64_t* keys = stack + sp;
   int n = 0;
