@@ -414,11 +414,19 @@ template <int N, int W, typename Node>
 // first (one test may end the ray), then children in descending slot order
 // (as Embree's occlusion traversal); measured best on the benchmark scenes.
 // Pushes all but one child (prefetched) and returns the one to visit next.
-template <int N, int W, typename Node>
+template <int N, bool kScalar, int W, typename Node>
 [[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
                                                        uint64_t* stack, int& sp) {
   uint32_t leaves = 0;
-  for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
+  if constexpr (kScalar) {
+    for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
+  } else {
+    // The leaf flag is each reference's top bit: one sign-bit mask of the
+    // references (the child array is aligned as the node's planes). GCC 12
+    // compiled the loop above to eight loads, shifts and ors per node
+    // (callgrind, sponza shadow rays: 7 % of the walk's instructions).
+    leaves = sign_bits(simd::vfloat<N>::load(reinterpret_cast<const float*>(child)));
+  }
   leaves &= mask;
   for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
     const uint32_t c = child[simd::ctz(m)];
@@ -690,7 +698,7 @@ inline void walk_wide(const WideView<N, W, Node>& bvh, const Ray& ray, uint32_t 
         cur = child[i0];
         continue;
       }
-      cur = kAnyHit ? descend_any_hit(bvh, child, mask, stack, sp)
+      cur = kAnyHit ? descend_any_hit<N, kScalar>(bvh, child, mask, stack, sp)
                     : descend_closest<N, W, kScalar>(bvh, child, mask, tnear, stack, sp);
       continue;
     }
