@@ -1541,6 +1541,11 @@ TEST(BvhSimd, SixteenLanesComputeWhatEachLaneDefines) {
     std::memcpy(&i, &f, 4);
     return i;
   };
+  const auto from_bits = [](int32_t i) {
+    float f;
+    std::memcpy(&f, &i, 4);
+    return f;
+  };
   const auto same = [&](V got, auto want, const char* what) {
     alignas(64) float g[16];
     got.store(g);
@@ -1560,21 +1565,11 @@ TEST(BvhSimd, SixteenLanesComputeWhatEachLaneDefines) {
   same(max_bits(va, vb), [&](int i) { return bits(a[i]) > bits(b[i]) ? a[i] : b[i]; }, "max_bits");
   same(fmadd(va, vc, vb), [&](int i) { return std::fma(a[i], c[i], b[i]); }, "fmadd");
   same(V::broadcast(2.5f), [&](int) { return 2.5f; }, "broadcast");
-  const auto bitwise = [&](int i, auto op) {
-    const int32_t r = op(bits(a[i]), bits(b[i]));
-    float f;
-    std::memcpy(&f, &r, 4);
-    return f;
-  };
+  const auto bitwise = [&](int i, auto op) { return from_bits(op(bits(a[i]), bits(b[i]))); };
   same(and_bits(va, vb), [&](int i) { return bitwise(i, [](int32_t x, int32_t y) { return x & y; }); }, "and");
   same(xor_bits(va, vb), [&](int i) { return bitwise(i, [](int32_t x, int32_t y) { return x ^ y; }); }, "xor");
   same(andnot(va, vb), [&](int i) { return bitwise(i, [](int32_t x, int32_t y) { return ~x & y; }); }, "andnot");
-  same(add_ulps(vc, 3), [&](int i) {
-    const int32_t r = bits(c[i]) + 3;
-    float f;
-    std::memcpy(&f, &r, 4);
-    return f;
-  }, "add_ulps");
+  same(add_ulps(vc, 3), [&](int i) { return from_bits(bits(c[i]) + 3); }, "add_ulps");
   const auto mask = [&](auto pred) {
     uint32_t m = 0;
     for (int i = 0; i < 16; ++i) m |= static_cast<uint32_t>(pred(i)) << i;
