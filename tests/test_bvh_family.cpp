@@ -242,12 +242,14 @@ TEST(BvhFamily, RejectsBadParameters) {
                            "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
                            "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
                            "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
-                           "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32"})
+                           "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
+                           "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt,layout=bvh4,block=4"));
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
+  EXPECT_NO_THROW(make_accelerator("bvh:owalk=0,layout=bvh4"));
 }
 
 // tri=mt (the study option measuring what watertightness costs) tests the
@@ -1431,6 +1433,82 @@ TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
 TEST(BvhPacket, RejectsBadParameters) {
   EXPECT_THROW(make_accelerator("bvh:packet=8"), SpecError);
   EXPECT_THROW(make_accelerator("bvh:packet=16,layout=bvh4"), SpecError);
+}
+
+TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
+  // A batch whose rays mostly share a direction octant takes the walk
+  // specialised to each ray's octant (traverse_wide.h); the same rays
+  // interleaved so the octant changes every ray, or traced with counters,
+  // take the general walk. Every hit field must be equal, occlusion too.
+  // Each octant's group holds rays that leave the fast kernel (axis-parallel,
+  // tmin < 0, invalid, an origin far beyond the scene) and short ones.
+  const test::NamedMesh s = test::soup(3000, 29);
+  const Aabb box = s.mesh.bounds();
+  const Vec3f centre = box.center(), half = 0.5f * (box.hi - box.lo);
+  Pcg32 rng(21, 3);
+  constexpr int kPerOctant = 96;
+  std::vector<Ray> grouped;
+  for (int oct = 0; oct < 8; ++oct) {
+    const Vec3f sign(oct & 1 ? -1.0f : 1.0f, oct & 2 ? -1.0f : 1.0f, oct & 4 ? -1.0f : 1.0f);
+    for (int i = 0; i < kPerOctant; ++i) {
+      const Vec3f u(2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f);
+      Ray r(centre + 1.2f * half.cwiseProduct(u), test::random_direction(rng).cwiseAbs().cwiseProduct(sign));
+      if (i == 7) r.dir.x() = sign.x() * 0.0f;  // axis-parallel, in its octant (+0 or -0)
+      if (i == 11) r.tmin = -1.0f;
+      if (i == 13) r.dir = Vec3f(0, 0, 0);  // invalid
+      if (i == 17) r.org = centre + 1e6f * sign;
+      if (i % 5 == 3) r.tmax = 0.3f * half.norm();
+      ASSERT_EQ(ray_octant(r), i == 13 ? 0 : oct);
+      grouped.push_back(r);
+    }
+  }
+  std::vector<Ray> interleaved;
+  for (int i = 0; i < kPerOctant; ++i)
+    for (int oct = 0; oct < 8; ++oct) interleaved.push_back(grouped[oct * kPerOctant + i]);
+  ASSERT_TRUE(batch_is_octant_coherent(grouped));
+  ASSERT_FALSE(batch_is_octant_coherent(interleaved));
+  const size_t n = grouped.size();
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:block=4,leaf=4,bleaf=1",
+                           "bvh:builder=sbvh,opt=reinsert"}) {
+    auto accel = make_accelerator(spec);
+    accel->build(s.mesh);
+    auto study = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "owalk=0");
+    study->build(s.mesh);
+    std::vector<Hit> octant(n), general(n), counted(n), study_hits(n);
+    std::vector<uint8_t> occ_octant(n), occ_general(n), occ_study(n);
+    TraversalStats stats;
+    accel->intersect(grouped, octant);
+    accel->intersect(grouped, counted, &stats);
+    accel->occluded(grouped, occ_octant);
+    study->intersect(grouped, study_hits);
+    study->occluded(grouped, occ_study);
+    {
+      std::vector<Hit> h(n);
+      std::vector<uint8_t> o(n);
+      accel->intersect(interleaved, h);
+      accel->occluded(interleaved, o);
+      for (int i = 0; i < kPerOctant; ++i)
+        for (int oct = 0; oct < 8; ++oct) {
+          general[oct * kPerOctant + i] = h[i * 8 + oct];
+          occ_general[oct * kPerOctant + i] = o[i * 8 + oct];
+        }
+    }
+    size_t hits = 0, occluded = 0;
+    for (size_t i = 0; i < n; ++i) {
+      hits += octant[i].valid();
+      occluded += occ_octant[i];
+      ASSERT_EQ(std::memcmp(&octant[i], &general[i], sizeof(Hit)), 0)
+          << spec << " ray " << i << ": octant walk prim " << octant[i].prim << " t " << octant[i].t
+          << ", general prim " << general[i].prim << " t " << general[i].t;
+      ASSERT_EQ(std::memcmp(&octant[i], &counted[i], sizeof(Hit)), 0) << spec << " ray " << i << " (counted)";
+      ASSERT_EQ(std::memcmp(&octant[i], &study_hits[i], sizeof(Hit)), 0) << spec << " ray " << i << " (owalk=0)";
+      ASSERT_EQ(occ_octant[i], occ_study[i]) << spec << " ray " << i << " (owalk=0)";
+      ASSERT_EQ(occ_octant[i], occ_general[i]) << spec << " ray " << i;
+      ASSERT_EQ(occ_octant[i] != 0, octant[i].valid()) << spec << " ray " << i;
+    }
+    EXPECT_GT(hits, n / 4) << spec;
+    EXPECT_EQ(occluded, hits) << spec;
+  }
 }
 
 TEST(BvhOcclusionOrder, NeedsAWideLayout) {

@@ -70,6 +70,7 @@ struct BvhConfig {
   bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
   bool occlusion_order = false;  // aorder=rtsah: child slots ordered for any-hit walks (occlusion_order.h)
+  bool octant_walks = true;  // owalk=1: coherent batches take octant-specialised walks (traverse_wide.h)
 };
 
 int layout_width(LayoutKind l) {
@@ -122,11 +123,13 @@ template <int N, int W, bool kScalar = false, typename Node = WideNode<N>>
 class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel> {
   using Batch = BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel>;
   static constexpr bool kFloatNodes = std::is_same_v<Node, WideNode<N>>;
+  // Octant-specialised walks for coherent batches (traverse_wide.h, batch_is_octant_coherent).
+  static constexpr bool kOctantWalks = !kScalar && kFloatNodes;
   static_assert(kFloatNodes || !kScalar, "simd=0 walks float nodes");
 
  public:
-  WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri)
-      : Batch(tri), bvh_(std::move(bvh)), packets_(packets) {
+  WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri, bool octant_walks = false)
+      : Batch(tri), bvh_(std::move(bvh)), packets_(packets), octant_walks_(octant_walks) {
     view_ = WideView<N, W, Node>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref,
                                  wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.
@@ -144,7 +147,24 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
         return;
       }
     }
+    if constexpr (kOctantWalks) {
+      if (octant_walks_ && !stats && this->triangle_test() == TriangleTest::Watertight &&
+          batch_is_octant_coherent(rays)) {
+        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide_octant<N, W, false>(view_, rays[i]);
+        return;
+      }
+    }
     Batch::intersect(rays, hits, stats);
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
+    if constexpr (kOctantWalks) {
+      if (octant_walks_ && !stats && this->triangle_test() == TriangleTest::Watertight &&
+          batch_is_octant_coherent(rays)) {
+        for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_wide_octant<N, W, true>(view_, rays[i]).valid();
+        return;
+      }
+    }
+    Batch::occluded(rays, occ, stats);
   }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
@@ -158,14 +178,16 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
  private:
   WideBvh<N, W, Node> bvh_;
   bool packets_;
+  bool octant_walks_;
   WideView<N, W, Node> view_;
 };
 
 template <int N, int W, bool kScalar = false>
 std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
-                                         TriangleTest tri, size_t& bytes) {
+                                         TriangleTest tri, size_t& bytes, bool octant_walks = false) {
   const bool edges = tri == TriangleTest::MollerTrumbore;
-  auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh, edges), packets, tri);
+  auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh, edges), packets, tri,
+                                                     octant_walks);
   bytes = k->bytes();
   return k;
 }
@@ -347,15 +369,15 @@ class BvhAccel final : public Accelerator {
       else if (cfg_.layout == LayoutKind::Bvh16) kernel_ = make_wide_kernel<16, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8, single rays (checked by the spec parser)
-      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes);
+      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
-      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes);
-      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, cfg_.tri, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
     } else {
-      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, cfg_.tri, bytes);
-      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, cfg_.tri, bytes);
-      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, cfg_.tri, bytes);
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
@@ -418,6 +440,10 @@ AcceleratorInfo bvh_accelerator_info() {
        {"aorder", "slot", "wide layouts, any-hit child order: slot (the collapse's, descending) or rtsah (slots ordered "
         "by estimated occlusion per cost, Ize & Hansen 2011; the same tree and closest hits)",
         one_of({"slot", "rtsah"})},
+       {"owalk", "1", "wide layouts with float nodes: 1 (batches whose rays mostly share a direction octant, such as "
+        "camera rays, walk with the node test specialised to each ray's octant) or 0 (the general walk for every batch; "
+        "a study option, the same answers)",
+        integer_of({0, 1})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
@@ -469,6 +495,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.simd = parse_simd(p);
         c.quantized = p.str("node") == "q8";
         c.occlusion_order = p.str("aorder") == "rtsah";
+        c.octant_walks = p.integer("owalk") == 1;
         // layout=auto: 16-wide nodes where one AVX-512 instruction tests a
         // plane of all sixteen children and nothing in the spec needs 8-wide
         // ones (simd=0 follows, so that it stays the same tree with scalar
@@ -487,6 +514,8 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.occlusion_order && c.layout == LayoutKind::Bvh2)
           throw SpecError("bvh: aorder=rtsah needs a wide layout (bvh4, bvh8, bvh16)");
         if (c.layout == LayoutKind::Bvh16 && c.block != 8) throw SpecError("bvh: layout=bvh16 needs block=8");
+        if (p.given("owalk") && (c.layout == LayoutKind::Bvh2 || c.quantized || !c.simd))
+          throw SpecError("bvh: owalk needs a wide layout with float nodes and simd=1");
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))

@@ -40,6 +40,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <span>
 #include <type_traits>
 
 #include "accel/bvh/bvh_wide_node.h"
@@ -238,12 +239,28 @@ template <int N>
   return fmadd(simd::u8_to_float8(&node.q[0][0] + off), V::broadcast(node.cell(axis)), V::broadcast(node.origin[axis]));
 }
 
+// The float offset of axis a's near (or far) planes in a node: the ray's, or
+// for a walk specialised to one direction octant a constant (the same value:
+// init_node_ray's offsets from the direction's sign bits).
+template <int N, int kOctant, bool kNear>
+[[gnu::always_inline]] inline int wide_plane_offset(const WideNodeRay<N>& r, int a) {
+  if constexpr (kOctant < 0) {
+    return kNear ? r.near_off[a] : r.far_off[a];
+  } else {
+    const int neg = (kOctant >> a) & 1;
+    return (2 * a + (kNear ? neg : 1 - neg)) * N;
+  }
+}
+
 // Tests the N child boxes of a node; returns the mask of children whose
 // (padded) slab interval overlaps [tmin, tmax], and their entry distances.
 // kExact: Ize's subtract-then-multiply form, with every possibly-NaN operand
 // first in min/max (x86 min/max return the second operand when one is NaN),
 // for axis-parallel rays and builds without FMA.
-template <int N, bool kExact, typename Node>
+// kOctant: -1, or the ray's direction octant (bit a set when dir[a] is
+// negative, as init_node_ray's sign mask), which makes the plane offsets
+// constants (octant_walk below).
+template <int N, bool kExact, int kOctant = -1, typename Node>
 [[gnu::always_inline]] inline uint32_t intersect_children(const Node& node, const WideNodeRay<N>& r,
                                                           simd::vfloat<N> tmin, simd::vfloat<N> tmax,
                                                           simd::vfloat<N>& tnear) {
@@ -254,12 +271,12 @@ template <int N, bool kExact, typename Node>
   // the current one by less than that must not be culled.
 #if defined(RAYLAB_SIMD_FMA)
   if constexpr (!kExact) {
-    const V nx = fmadd(plane(r.near_off[0], 0), r.inv[0], r.near_shift[0]);
-    const V ny = fmadd(plane(r.near_off[1], 1), r.inv[1], r.near_shift[1]);
-    const V nz = fmadd(plane(r.near_off[2], 2), r.inv[2], r.near_shift[2]);
-    const V fx = fmadd(plane(r.far_off[0], 0), r.inv[0], r.far_shift[0]);
-    const V fy = fmadd(plane(r.far_off[1], 1), r.inv[1], r.far_shift[1]);
-    const V fz = fmadd(plane(r.far_off[2], 2), r.inv[2], r.far_shift[2]);
+    const V nx = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 0), 0), r.inv[0], r.near_shift[0]);
+    const V ny = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 1), 1), r.inv[1], r.near_shift[1]);
+    const V nz = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 2), 2), r.inv[2], r.near_shift[2]);
+    const V fx = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 0), 0), r.inv[0], r.far_shift[0]);
+    const V fy = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 1), 1), r.inv[1], r.far_shift[1]);
+    const V fz = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 2), 2), r.inv[2], r.far_shift[2]);
     // Integer-order min/max (kernel precondition: tmin >= +0). The near
     // distance includes tmin, so its maximum is >= 0 and exact. A negative
     // far distance may not be the true minimum, but any negative one culls
@@ -269,12 +286,12 @@ template <int N, bool kExact, typename Node>
     return padded_slab_mask(tnear, min_bits(min_bits(fx, fy), min_bits(fz, tmax)));
   }
 #endif
-  const V nx = (plane(r.near_off[0], 0) - r.org[0]) * r.inv[0];
-  const V ny = (plane(r.near_off[1], 1) - r.org[1]) * r.inv[1];
-  const V nz = (plane(r.near_off[2], 2) - r.org[2]) * r.inv[2];
-  const V fx = (plane(r.far_off[0], 0) - r.org[0]) * r.inv[0];
-  const V fy = (plane(r.far_off[1], 1) - r.org[1]) * r.inv[1];
-  const V fz = (plane(r.far_off[2], 2) - r.org[2]) * r.inv[2];
+  const V nx = (plane(wide_plane_offset<N, kOctant, true>(r, 0), 0) - r.org[0]) * r.inv[0];
+  const V ny = (plane(wide_plane_offset<N, kOctant, true>(r, 1), 1) - r.org[1]) * r.inv[1];
+  const V nz = (plane(wide_plane_offset<N, kOctant, true>(r, 2), 2) - r.org[2]) * r.inv[2];
+  const V fx = (plane(wide_plane_offset<N, kOctant, false>(r, 0), 0) - r.org[0]) * r.inv[0];
+  const V fy = (plane(wide_plane_offset<N, kOctant, false>(r, 1), 1) - r.org[1]) * r.inv[1];
+  const V fz = (plane(wide_plane_offset<N, kOctant, false>(r, 2), 2) - r.org[2]) * r.inv[2];
   tnear = max(nx, max(ny, max(nz, tmin)));
   const V tfar0 = min(fx, min(fy, min(fz, tmax)));
   // Padded outward in both signs (negative far distances arise when tmin < 0).
@@ -610,9 +627,13 @@ inline uint64_t count_children(const Node& node) {
 // kTest: the leaf test, watertight, or Moller-Trumbore on blocks holding
 // edges (tri=mt, a study option; never with kScalar).
 template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false,
-          TriangleTest kTest = TriangleTest::Watertight, typename Node>
-inline void walk_wide(const WideView<N, W, Node>& bvh, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
+          TriangleTest kTest = TriangleTest::Watertight, int kOctant = -1, typename Node>
+inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
   static_assert(!(kScalar && kTest != TriangleTest::Watertight), "simd=0 tests watertight only");
+  static_assert(kOctant < 0 || (!kScalar && !kAxisParallel), "octant walks: the FMA kernel's vector test only");
+  // A copy: the stores of the walk (stack, hit) could alias the caller's
+  // view, so GCC reloaded the node array's address through it at every node.
+  const WideView<N, W, Node> bvh = view;
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
@@ -685,7 +706,7 @@ inline void walk_wide(const WideView<N, W, Node>& bvh, const Ray& ray, uint32_t 
         mask = intersect_children_scalar<N, kExact>(node, snr, tmin0, rec.tmax(), tn);
         tnear = V::load(tn);
       } else {
-        mask = intersect_children<N, kExact>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
+        mask = intersect_children<N, kExact, kOctant>(node, nr, tmin_v, V::broadcast(rec.tmax()), tnear);
       }
       if (mask == 0) {
         if (!pop()) return;
@@ -738,6 +759,62 @@ inline Hit traverse_wide(const WideView<N, W, Node>& bvh, const Ray& ray, Traver
     return traverse_wide_kernel<N, W, kAnyHit, kCount, false, kScalar, kTest>(bvh, ray, stats);
   if (!ray_is_valid(ray)) return HitRecorder<kAnyHit, kCount>(ray, stats).hit();  // counts the ray
   return traverse_wide_kernel<N, W, kAnyHit, kCount, true, kScalar, kTest>(bvh, ray, stats);
+}
+
+// The direction octant of a ray: bit a set when dir[a]'s sign bit is (as
+// init_node_ray's sign mask).
+inline int ray_octant(const Ray& r) {
+#if defined(__SSE2__)
+  return _mm_movemask_ps(_mm_loadu_ps(r.dir.data())) & 7;  // dx dy dz tmax (base/ray.h), as init_node_ray
+#else
+  return static_cast<int>(std::signbit(r.dir.x())) | static_cast<int>(std::signbit(r.dir.y())) << 1 |
+         static_cast<int>(std::signbit(r.dir.z())) << 2;
+#endif
+}
+
+// A batch whose consecutive rays mostly share a direction octant (camera
+// rays; shadow rays towards one light): each ray takes the walk specialised
+// to its octant, whose node test reads its planes at constant offsets (with
+// AVX2's 16 registers GCC otherwise keeps the six offsets on the stack and
+// reloads one per plane). The choice is one switch per ray, predicted in such
+// a batch; incoherent batches keep the general walk, where that switch
+// mispredicts (docs/bvh-speed.md, sessions 10 and 21).
+// Coherent: the octant changes between consecutive rays at most n / 8
+// times. The scan stops at the first change past that, which incoherent
+// batches (a change at 7 rays of 8) reach within about 40 rays.
+inline bool batch_is_octant_coherent(std::span<const Ray> rays) {
+  if (rays.empty()) return false;
+  const size_t limit = rays.size() / 8;
+  size_t changes = 0;
+  int prev = ray_octant(rays[0]);
+  for (size_t i = 1; i < rays.size(); ++i) {
+    const int octant = ray_octant(rays[i]);
+    changes += octant != prev;
+    prev = octant;
+    if (changes > limit) return false;
+  }
+  return true;
+}
+
+template <int N, int W, bool kAnyHit, typename Node>
+inline Hit traverse_wide_octant(const WideView<N, W, Node>& bvh, const Ray& ray) {
+  if (!ray_takes_fma_kernel(ray, bvh.fma_origin_limit)) [[unlikely]]
+    return traverse_wide<N, W, kAnyHit, false>(bvh, ray, nullptr);
+  HitRecorder<kAnyHit, false> rec(ray, nullptr);
+  const auto walk = [&]<int kOctant>() {
+    walk_wide<N, W, kAnyHit, false, false, false, TriangleTest::Watertight, kOctant>(bvh, ray, bvh.root_ref, rec);
+  };
+  switch (ray_octant(ray)) {
+    case 0: walk.template operator()<0>(); break;
+    case 1: walk.template operator()<1>(); break;
+    case 2: walk.template operator()<2>(); break;
+    case 3: walk.template operator()<3>(); break;
+    case 4: walk.template operator()<4>(); break;
+    case 5: walk.template operator()<5>(); break;
+    case 6: walk.template operator()<6>(); break;
+    default: walk.template operator()<7>(); break;
+  }
+  return rec.hit();
 }
 
 }  // namespace raylab
