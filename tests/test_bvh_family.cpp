@@ -243,7 +243,7 @@ TEST(BvhFamily, RejectsBadParameters) {
                            "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
                            "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
                            "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
-                           "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0"})
+                           "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0", "bvh:owalk=1,block=4"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt"));
@@ -1468,7 +1468,7 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
   ASSERT_TRUE(batch_is_octant_coherent(grouped));
   ASSERT_FALSE(batch_is_octant_coherent(interleaved));
   const size_t n = grouped.size();
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:block=4,leaf=4,bleaf=1",
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh8", "bvh:layout=bvh16", "bvh:packet=16",
                            "bvh:builder=sbvh,opt=reinsert"}) {
     auto accel = make_accelerator(spec);
     accel->build(s.mesh);

@@ -123,8 +123,10 @@ template <int N, int W, bool kScalar = false, typename Node = WideNode<N>>
 class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel> {
   using Batch = BatchAccelerator<WideKernel<N, W, kScalar, Node>, Kernel>;
   static constexpr bool kFloatNodes = std::is_same_v<Node, WideNode<N>>;
-  // Octant-specialised walks for coherent batches (traverse_wide.h, batch_is_octant_coherent).
-  static constexpr bool kOctantWalks = !kScalar && kFloatNodes;
+  // Octant-specialised walks for coherent batches (traverse_wide.h, batch_is_octant_coherent);
+  // 8-triangle blocks only: sixteen walks more per kernel (they made this file's
+  // compilation 50 % longer for all seven float-node kernels).
+  static constexpr bool kOctantWalks = !kScalar && kFloatNodes && W == 8;
   static_assert(kFloatNodes || !kScalar, "simd=0 walks float nodes");
 
  public:
@@ -440,7 +442,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"aorder", "slot", "wide layouts, any-hit child order: slot (the collapse's, descending) or rtsah (slots ordered "
         "by estimated occlusion per cost, Ize & Hansen 2011; the same tree and closest hits)",
         one_of({"slot", "rtsah"})},
-       {"owalk", "1", "wide layouts with float nodes: 1 (batches whose rays mostly share a direction octant, such as "
+       {"owalk", "1", "wide layouts with float nodes and block=8: 1 (batches whose rays mostly share a direction octant, such as "
         "camera rays, walk with the node test specialised to each ray's octant) or 0 (the general walk for every batch; "
         "a study option, the same answers)",
         integer_of({0, 1})},
@@ -514,8 +516,8 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.occlusion_order && c.layout == LayoutKind::Bvh2)
           throw SpecError("bvh: aorder=rtsah needs a wide layout (bvh4, bvh8, bvh16)");
         if (c.layout == LayoutKind::Bvh16 && c.block != 8) throw SpecError("bvh: layout=bvh16 needs block=8");
-        if (p.given("owalk") && (c.layout == LayoutKind::Bvh2 || c.quantized || !c.simd))
-          throw SpecError("bvh: owalk needs a wide layout with float nodes and simd=1");
+        if (p.given("owalk") && (c.layout == LayoutKind::Bvh2 || c.quantized || !c.simd || c.block != 8))
+          throw SpecError("bvh: owalk needs a wide layout with float nodes, block=8 and simd=1");
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))
