@@ -364,7 +364,7 @@ class PacketTracer {
       if (mask != 0) {
         alignas(32) uint32_t refs[N];
         for (uint32_t c = 0; c < N; ++c) refs[c] = child_visit_ref(node_index, c, node.child[c]);
-        const auto prefetch = [&](uint32_t i) { prefetch_child(bvh_, node.child[i]); };
+        const auto prefetch = [&](uint32_t i) __attribute__((always_inline)) { prefetch_child(bvh_, node.child[i]); };
         if ((mask & (mask - 1)) == 0) {
           next = refs[simd::ctz(mask)];
         } else {

@@ -607,7 +607,13 @@ template <int N, bool kScalar = false, typename Prefetch>
 template <int N, int W, bool kScalar = false, typename Node>
 [[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
                                                        simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
-  return push_by_distance<N, kScalar>(child, mask, tnear, stack, sp, [&](uint32_t i) { prefetch_child(bvh, child[i]); });
+  // always_inline: GCC 12 found this lambda free of side effects (a prefetch
+  // is not one) and deleted its calls before inlining it, so closest-hit
+  // walks prefetched nothing (any-hit walks, which call prefetch_child
+  // directly, did).
+  return push_by_distance<N, kScalar>(child, mask, tnear, stack, sp, [&](uint32_t i) __attribute__((always_inline)) {
+    prefetch_child(bvh, child[i]);
+  });
 }
 
 // Counting (kCount): a node visited is a child box tested, so an inner node
