@@ -259,7 +259,7 @@ template <int N, int kOctant, bool kNear>
 // for axis-parallel rays and builds without FMA.
 // kOctant: -1, or the ray's direction octant (bit a set when dir[a] is
 // negative, as init_node_ray's sign mask), which makes the plane offsets
-// constants (octant_walk below).
+// constants (traverse_wide_octant below).
 template <int N, bool kExact, int kOctant = -1, typename Node>
 [[gnu::always_inline]] inline uint32_t intersect_children(const Node& node, const WideNodeRay<N>& r,
                                                           simd::vfloat<N> tmin, simd::vfloat<N> tmax,
@@ -636,7 +636,7 @@ template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kSca
           TriangleTest kTest = TriangleTest::Watertight, int kOctant = -1, typename Node>
 inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec) {
   static_assert(!(kScalar && kTest != TriangleTest::Watertight), "simd=0 tests watertight only");
-  static_assert(kOctant < 0 || (!kScalar && !kAxisParallel), "octant walks: the FMA kernel's vector test only");
+  static_assert(kOctant < 0 || (!kScalar && !kAxisParallel), "octant walks: vector tests, rays that are not axis-parallel");
   // A copy: the stores of the walk (stack, hit) could alias the caller's
   // view, so GCC reloaded the node array's address through it at every node.
   const WideView<N, W, Node> bvh = view;
