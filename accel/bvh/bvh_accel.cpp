@@ -149,24 +149,28 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
         return;
       }
     }
-    if constexpr (kOctantWalks) {
-      if (octant_walks_ && !stats && this->triangle_test() == TriangleTest::Watertight &&
-          batch_is_octant_coherent(rays)) {
-        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traverse_wide_octant<N, W, false>(view_, rays[i]);
-        return;
-      }
-    }
+    if (trace_octant_walks<false>(rays, stats, [&](size_t i, const Hit& h) { hits[i] = h; })) return;
     Batch::intersect(rays, hits, stats);
   }
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    if constexpr (kOctantWalks) {
-      if (octant_walks_ && !stats && this->triangle_test() == TriangleTest::Watertight &&
-          batch_is_octant_coherent(rays)) {
-        for (size_t i = 0; i < rays.size(); ++i) occ[i] = traverse_wide_octant<N, W, true>(view_, rays[i]).valid();
-        return;
-      }
-    }
+    if (trace_octant_walks<true>(rays, stats, [&](size_t i, const Hit& h) { occ[i] = h.valid(); })) return;
     Batch::occluded(rays, occ, stats);
+  }
+
+  // Traces an uncounted watertight batch whose rays mostly share an octant
+  // through the octant walks, out(i, hit) per ray, and returns true; else
+  // false (counted batches keep the general walk, whose counters every
+  // structure shares). Kernels without octant walks never instantiate them.
+  template <bool kAnyHit, typename Out>
+  bool trace_octant_walks(std::span<const Ray> rays, TraversalStats* stats, Out&& out) const {
+    if constexpr (kOctantWalks) {
+      if (!octant_walks_ || stats || this->triangle_test() != TriangleTest::Watertight ||
+          !batch_is_octant_coherent(rays))
+        return false;
+      for (size_t i = 0; i < rays.size(); ++i) out(i, traverse_wide_octant<N, W, kAnyHit>(view_, rays[i]));
+      return true;
+    }
+    return false;
   }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
