@@ -1123,13 +1123,15 @@ TEST(BvhTraversal, SixteenWidePushEqualsTheScalarOrder) {
     if ((mask & (mask - 1)) == 0) mask |= 0x8001u;    // the walk enters a single child directly
     const auto tnear = simd::vfloat<16>::load(dist);
     alignas(64) uint64_t got[64] = {}, want[64] = {};
-    int sp_got = 3, sp_want = 3;  // on top of earlier entries
+    uint64_t* top_got = got + 3;  // on top of earlier entries
+    uint64_t* top_want = want + 3;
     uint32_t pre_got = 0, pre_want = 0;
-    const uint32_t next_got = push_by_distance<16>(refs, mask, tnear, got, sp_got, [&](uint32_t i) { pre_got |= 1u << i; });
+    const uint32_t next_got = push_by_distance<16>(refs, mask, tnear, top_got, [&](uint32_t i) { pre_got |= 1u << i; });
     const uint32_t next_want =
-        push_by_distance<16, true>(refs, mask, tnear, want, sp_want, [&](uint32_t i) { pre_want |= 1u << i; });
+        push_by_distance<16, true>(refs, mask, tnear, top_want, [&](uint32_t i) { pre_want |= 1u << i; });
     ASSERT_EQ(next_got, next_want) << "mask " << mask;
-    ASSERT_EQ(sp_got, sp_want) << "mask " << mask;
+    const int sp_got = static_cast<int>(top_got - got);
+    ASSERT_EQ(sp_got, static_cast<int>(top_want - want)) << "mask " << mask;
     ASSERT_EQ(sp_got, 3 + simd::popcount(mask) - 1);
     for (int i = 3; i < sp_got; ++i) ASSERT_EQ(got[i], want[i]) << "mask " << mask << " entry " << i;
     EXPECT_EQ(pre_got & ~mask, 0u);

@@ -79,6 +79,23 @@ inline bool isa_supported_by_cpu() {
 
 inline uint32_t ctz(uint32_t m) { return static_cast<uint32_t>(__builtin_ctz(m)); }
 inline int popcount(uint32_t m) { return __builtin_popcount(m); }
+// ctz as a 64-bit index: with the 32-bit form GCC 12 sign-extended the
+// result before addressing with it (one instruction on the walk's path from
+// a node to the next).
+inline uint64_t ctz_index(uint32_t m) { return static_cast<uint64_t>(__builtin_ctzll(static_cast<uint64_t>(m))); }
+
+// A data-dependent condition, true about as often as false, that a branch
+// predictor cannot learn: the compiler is told so, which makes it choose a
+// conditional move over a branch (GCC 12 branched on a plain comparison).
+inline bool unpredictable(bool c) {
+#if defined(__clang__)
+  return __builtin_unpredictable(c);
+#elif defined(__GNUC__)
+  return __builtin_expect_with_probability(c, 1, 0.5);
+#else
+  return c;
+#endif
+}
 
 #if defined(__AVX2__)
 // AVX2 has no compress instruction (AVX-512's vpcompress). Its stand-in: a

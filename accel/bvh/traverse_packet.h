@@ -351,7 +351,7 @@ class PacketTracer {
   void walk(std::span<const Ray> rays, const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
     float tmax_hi = ph.greatest_t();
     alignas(64) uint64_t stack[kWideStackSize];
-    int sp = 0;
+    uint64_t* top = stack;
     uint32_t node_index = bvh_.root_ref;
     while (true) {
       // The packet visits an inner node: the children the frustum keeps go
@@ -368,7 +368,7 @@ class PacketTracer {
         if ((mask & (mask - 1)) == 0) {
           next = refs[simd::ctz(mask)];
         } else {
-          next = push_by_distance<N>(refs, mask, tnear, stack, sp, prefetch);
+          next = push_by_distance<N>(refs, mask, tnear, top, prefetch);
         }
         have_next = true;
       }
@@ -378,9 +378,9 @@ class PacketTracer {
           // Next entry some ray can still enter before its closest hit (the
           // single-ray walk culls the same way, see walk_wide's pop).
           const uint64_t limit = key_cull_limit(tmax_hi);
-          while (sp > 0 && stack[sp - 1] > limit) --sp;
-          if (sp == 0) return;
-          next = key_ref(stack[--sp]);
+          while (top != stack && top[-1] > limit) --top;
+          if (top == stack) return;
+          next = key_ref(*--top);
         }
         have_next = false;
         const WideNode<N>& parent = bvh_.nodes[(next & ~wide_ref::kLeafBit) >> kSlotBits];

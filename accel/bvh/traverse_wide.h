@@ -433,7 +433,7 @@ template <int N, int W, typename Node>
 // Pushes all but one child (prefetched) and returns the one to visit next.
 template <int N, bool kScalar, int W, typename Node>
 [[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
-                                                       uint64_t* stack, int& sp) {
+                                                       uint64_t*& top) {
   uint32_t leaves = 0;
   if constexpr (kScalar) {
     for (int i = 0; i < N; ++i) leaves |= (child[i] >> 31) << i;
@@ -448,15 +448,15 @@ template <int N, bool kScalar, int W, typename Node>
   for (uint32_t m = mask & ~leaves; m != 0; m &= m - 1) {
     const uint32_t c = child[simd::ctz(m)];
     prefetch_child(bvh, c);
-    stack[sp++] = child_key(0.0f, c);
+    *top++ = child_key(0.0f, c);
   }
-  if (leaves == 0) return key_ref(stack[--sp]);
+  if (leaves == 0) return key_ref(*--top);
   while (true) {
     const uint32_t c = child[simd::ctz(leaves)];
     leaves &= leaves - 1;
     if (leaves == 0) return c;
     prefetch_child(bvh, c);
-    stack[sp++] = child_key(0.0f, c);
+    *top++ = child_key(0.0f, c);
   }
 }
 
@@ -469,7 +469,7 @@ template <int N, bool kScalar, int W, typename Node>
 // next: +5 to +6 % closest-hit Mrays/s (session 13 of docs/bvh-speed.md).
 template <typename Nearest, typename Prefetch>
 [[gnu::always_inline]] inline uint32_t push_packed_keys(__m512i packed, uint32_t mask, Nearest&& nearest,
-                                                        uint64_t* stack, int& sp, Prefetch&& prefetch) {
+                                                        uint64_t*& top, Prefetch&& prefetch) {
   const uint32_t rest = mask & (mask - 1);
   if ((rest & (rest - 1)) == 0) {
     // Two children: order their keys with min/max (no branch to mispredict).
@@ -478,16 +478,16 @@ template <typename Nearest, typename Prefetch>
     const uint64_t k1 = static_cast<uint64_t>(packed[1]);
     const uint32_t i0 = simd::ctz(mask), i1 = simd::ctz(rest);
     prefetch(k0 > k1 ? i0 : i1);
-    stack[sp++] = std::max(k0, k1);
+    *top++ = std::max(k0, k1);
     return key_ref(std::min(k0, k1));
   }
   // Three or more: sort by distance, push all but the nearest.
   const int k = simd::popcount(mask);
   const uint64_t least = nearest();
   packed = k <= 4 ? sort4x2_descending(packed) : sort8_descending(packed);
-  _mm512_storeu_si512(stack + sp, packed);
+  _mm512_storeu_si512(top, packed);
   for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-  sp += k - 1;
+  top += k - 1;
   return key_ref(least);
 }
 #endif
@@ -499,7 +499,7 @@ template <typename Nearest, typename Prefetch>
 // prefetch(slot) is called for every child pushed.
 template <int N, bool kScalar = false, typename Prefetch>
 [[gnu::always_inline]] inline uint32_t push_by_distance(const uint32_t* refs, uint32_t mask, simd::vfloat<N> tnear,
-                                                        uint64_t* stack, int& sp, Prefetch&& prefetch) {
+                                                        uint64_t*& top, Prefetch&& prefetch) {
 #if defined(RAYLAB_SIMD_AVX512)
   if constexpr (N == 8 && !kScalar) {
     // All eight keys in one register; the nearest of three or more by the
@@ -511,7 +511,7 @@ template <int N, bool kScalar = false, typename Prefetch>
         _mm512_maskz_cvtepu32_epi64(0xFF, _mm256_xor_si256(_mm256_load_si256(reinterpret_cast<const __m256i*>(refs)),
                                                              _mm256_set1_epi32(static_cast<int>(kKeyRefFlip)))));
     return push_packed_keys(_mm512_maskz_compress_epi64(static_cast<__mmask8>(mask), keys), mask,
-                            [&] { return min_key(keys, static_cast<__mmask8>(mask)); }, stack, sp, prefetch);
+                            [&] { return min_key(keys, static_cast<__mmask8>(mask)); }, top, prefetch);
   }
   if constexpr (N == 16 && !kScalar) {
     // Sixteen keys in two registers (slots 0..7 and 8..15). Up to eight hit
@@ -534,14 +534,14 @@ template <int N, bool kScalar = false, typename Prefetch>
       // The hit keys of slots 8..15 into lanes nlo..k-1, after those of slots 0..7.
       const __mmask8 valid = static_cast<__mmask8>((1u << k) - 1u);
       const __m512i packed = _mm512_mask_expand_epi64(clo, static_cast<__mmask8>(valid & ~((1u << nlo) - 1u)), chi);
-      return push_packed_keys(packed, mask, [&] { return min_key(packed, valid); }, stack, sp, prefetch);
+      return push_packed_keys(packed, mask, [&] { return min_key(packed, valid); }, top, prefetch);
     }
-    _mm512_storeu_si512(stack + sp, clo);
-    _mm512_storeu_si512(stack + sp + nlo, chi);
-    sort_keys_descending(stack + sp, k);
+    _mm512_storeu_si512(top, clo);
+    _mm512_storeu_si512(top + nlo, chi);
+    sort_keys_descending(top, k);
     for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-    sp += k - 1;
-    return key_ref(stack[sp]);
+    top += k - 1;
+    return key_ref(*top);
   }
 #endif
   // The distances go through memory only on the paths that read them one by
@@ -549,19 +549,30 @@ template <int N, bool kScalar = false, typename Prefetch>
   alignas(64) float dist[N];
   const uint32_t rest = mask & (mask - 1);
   if ((rest & (rest - 1)) == 0) {
-    tnear.store(dist);
+    // Two children. The next node is chosen by one comparison of the two
+    // keys and a conditional move between the two references, so the path
+    // from the node test to the next node's address is a shift, an or, a
+    // compare and a move; the farther key, pushed, is off that path. The
+    // distances are clamped at 0 (child_key) in the vector, before the mask
+    // is known. (Ordering the keys by a mask and taking the nearer's
+    // reference from the key, as before, put about ten dependent
+    // instructions and a reload of the child there: GCC 12's code, session 22.)
+    max_bits(tnear, simd::vfloat<N>::broadcast(0.0f)).store(dist);
     const uint32_t i0 = simd::ctz(mask);
     const uint32_t i1 = simd::ctz(rest);
-    // Two children: ordered by a mask, not a branch (GCC made std::max and
-    // std::min of the keys a compare and a jump here, mispredicted about half
-    // the times it ran on incoherent rays: callgrind --branch-sim).
-    const uint64_t k0 = child_key(dist[i0], refs[i0]);
-    const uint64_t k1 = child_key(dist[i1], refs[i1]);
+    uint32_t b0, b1;
+    std::memcpy(&b0, &dist[i0], sizeof b0);
+    std::memcpy(&b1, &dist[i1], sizeof b1);
+    const uint32_t r0 = refs[i0], r1 = refs[i1];
+    const uint64_t k0 = static_cast<uint64_t>(b0) << 32 | (r0 ^ kKeyRefFlip);  // = child_key(dist, ref)
+    const uint64_t k1 = static_cast<uint64_t>(b1) << 32 | (r1 ^ kKeyRefFlip);
+    // A conditional move: GCC 12 branched on the plain comparison, which
+    // mispredicts about half the time on incoherent rays.
+    const uint32_t near_ref = simd::unpredictable(k0 > k1) ? r1 : r0;
     const uint64_t first_far = 0 - static_cast<uint64_t>(k0 > k1);  // all ones when k0 is the farther
-    const uint64_t far = k1 ^ ((k0 ^ k1) & first_far);
     prefetch(i1 ^ ((i0 ^ i1) & static_cast<uint32_t>(first_far)));
-    stack[sp++] = far;
-    return key_ref(k0 ^ k1 ^ far);
+    *top++ = k1 ^ ((k0 ^ k1) & first_far);
+    return near_ref;
   }
 #if defined(RAYLAB_SIMD_AVX2) && !defined(RAYLAB_SIMD_AVX512)
   if constexpr (N == 8 && !kScalar) {
@@ -579,19 +590,19 @@ template <int N, bool kScalar = false, typename Prefetch>
         perm);
     const __m256i lo = _mm256_unpacklo_epi32(refx, bits);  // keys 0 1 | 4 5
     const __m256i hi = _mm256_unpackhi_epi32(refx, bits);  // keys 2 3 | 6 7
-    uint64_t* keys = stack + sp;  // room for 8 (wide_stack_fits)
+    uint64_t* keys = top;  // room for 8 (wide_stack_fits)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys), _mm256_permute2x128_si256(lo, hi, 0x20));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(keys + 4), _mm256_permute2x128_si256(lo, hi, 0x31));
     const uint64_t nearest = sort8_keys_descending(keys, k);
     for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-    sp += k - 1;
+    top += k - 1;
     return key_ref(nearest);
   }
 #endif
   // Three or more: sort by distance, push all but the nearest.
   tnear.store(dist);
   const int k = simd::popcount(mask);
-  uint64_t* keys = stack + sp;
+  uint64_t* keys = top;
   int n = 0;
   for (uint32_t m = mask; m != 0; m &= m - 1) {
     const uint32_t i = simd::ctz(m);
@@ -600,18 +611,18 @@ template <int N, bool kScalar = false, typename Prefetch>
   if constexpr (kScalar || N > 8) sort_keys_descending(keys, n);  // keys are unique: the same order
   else sort8_keys_descending(keys, n);
   for (uint32_t m = mask; m != 0; m &= m - 1) prefetch(simd::ctz(m));
-  sp += k - 1;
-  return key_ref(stack[sp]);
+  top += k - 1;
+  return key_ref(*top);
 }
 
 template <int N, int W, bool kScalar = false, typename Node>
 [[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
-                                                       simd::vfloat<N> tnear, uint64_t* stack, int& sp) {
+                                                       simd::vfloat<N> tnear, uint64_t*& top) {
   // always_inline: GCC 12 found this lambda free of side effects (a prefetch
   // is not one) and deleted its calls before inlining it, so closest-hit
   // walks prefetched nothing (any-hit walks, which call prefetch_child
   // directly, did).
-  return push_by_distance<N, kScalar>(child, mask, tnear, stack, sp, [&](uint32_t i) __attribute__((always_inline)) {
+  return push_by_distance<N, kScalar>(child, mask, tnear, top, [&](uint32_t i) __attribute__((always_inline)) {
     prefetch_child(bvh, child[i]);
   });
 }
@@ -675,7 +686,10 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
   const V tmin_v = V::broadcast(tmin0);
 
   alignas(64) uint64_t stack[kWideStackSize];
-  int sp = 0;
+  // The next free entry: one pointer, not the array and an index (GCC 12
+  // kept the index and the array's address in memory, two loads before
+  // every pop's).
+  uint64_t* top = stack;
   uint32_t cur = start;
 
   // Closest hit: entries whose entry distance exceeds the current bound,
@@ -690,8 +704,8 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
 
   // Next subtree from the stack that can still hold a closer hit.
   auto pop = [&]() -> bool {
-    while (sp > 0) {
-      const uint64_t e = stack[--sp];
+    while (top != stack) {
+      const uint64_t e = *--top;
       if constexpr (!kAnyHit) {
         if (e > cull_key) continue;
       }
@@ -719,14 +733,13 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
         continue;
       }
       const uint32_t* child = node.child;
-      const uint32_t i0 = simd::ctz(mask);
       const uint32_t rest = mask & (mask - 1);
       if (rest == 0) {
-        cur = child[i0];
+        cur = child[simd::ctz_index(mask)];
         continue;
       }
-      cur = kAnyHit ? descend_any_hit<N, kScalar>(bvh, child, mask, stack, sp)
-                    : descend_closest<N, W, kScalar>(bvh, child, mask, tnear, stack, sp);
+      cur = kAnyHit ? descend_any_hit<N, kScalar>(bvh, child, mask, top)
+                    : descend_closest<N, W, kScalar>(bvh, child, mask, tnear, top);
       continue;
     }
 
