@@ -78,7 +78,8 @@ inline bool ray_is_valid(const Ray& r) {
 #else
   bool finite = true, nonzero = false;
   for (int a = 0; a < 3; ++a) {
-    finite &= (r.org[a] - r.org[a] == 0.0f) & (r.dir[a] - r.dir[a] == 0.0f);  // false for inf and NaN
+    finite &= r.org[a] - r.org[a] == 0.0f;  // false for inf and NaN
+    finite &= r.dir[a] - r.dir[a] == 0.0f;
     nonzero |= r.dir[a] != 0.0f;
   }
   return finite & nonzero & (r.tmin <= r.tmax) & (r.tmin < std::numeric_limits<float>::infinity());  // false for NaN
