@@ -23,13 +23,18 @@ namespace raylab {
 
 inline constexpr uint32_t kKeyRefFlip = 0x80000000u;  // the leaf bit of wide child references
 
+// Key of a child from the bits of its entry distance, already clamped at 0
+// (the walks clamp a node's distances in one vector operation).
+inline uint64_t child_key_bits(uint32_t dist_bits, uint32_t ref) {
+  return (static_cast<uint64_t>(dist_bits) << 32) | (ref ^ kKeyRefFlip);
+}
 // Key of a child: distance clamped at 0 (ordering only needs to be a heuristic
 // for negative entry distances, which arise only when tmin < 0).
 inline uint64_t child_key(float dist, uint32_t ref) {
   int32_t bits;
   std::memcpy(&bits, &dist, sizeof bits);
   bits = std::max(bits, 0);  // negative (or -0): order as 0
-  return (static_cast<uint64_t>(static_cast<uint32_t>(bits)) << 32) | (ref ^ kKeyRefFlip);
+  return child_key_bits(static_cast<uint32_t>(bits), ref);
 }
 inline float key_dist(uint64_t key) {
   const uint32_t bits = static_cast<uint32_t>(key >> 32);

@@ -564,8 +564,8 @@ template <int N, bool kScalar = false, typename Prefetch>
     std::memcpy(&b0, &dist[i0], sizeof b0);
     std::memcpy(&b1, &dist[i1], sizeof b1);
     const uint32_t r0 = refs[i0], r1 = refs[i1];
-    const uint64_t k0 = static_cast<uint64_t>(b0) << 32 | (r0 ^ kKeyRefFlip);  // = child_key(dist, ref)
-    const uint64_t k1 = static_cast<uint64_t>(b1) << 32 | (r1 ^ kKeyRefFlip);
+    const uint64_t k0 = child_key_bits(b0, r0);
+    const uint64_t k1 = child_key_bits(b1, r1);
     // A conditional move: GCC 12 branched on the plain comparison, which
     // mispredicts about half the time on incoherent rays.
     const uint32_t near_ref = simd::unpredictable(k0 > k1) ? r1 : r0;
