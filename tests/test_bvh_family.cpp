@@ -1513,6 +1513,67 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
   }
 }
 
+TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
+  // bvh (ahead=1) computes each ray's box-test scalars while the ray before
+  // it walks (trace_rays_ahead); ahead=0 computes them when the ray starts.
+  // Every hit field and every occlusion answer must be equal, in coherent
+  // batches (octant walks) and incoherent ones (the general walk), with rays
+  // that leave the fast kernel (axis-parallel, tmin < 0, invalid, an origin
+  // far beyond the scene) between ordinary ones, and as the last ray.
+  const test::NamedMesh s = test::soup(2000, 31);
+  const Aabb box = s.mesh.bounds();
+  const Vec3f centre = box.center(), half = 0.5f * (box.hi - box.lo);
+  Pcg32 rng(5, 9);
+  std::vector<Ray> coherent, incoherent;
+  const Vec3f eye = centre - 2.5f * half;
+  for (int i = 0; i < 600; ++i) {
+    const Vec3f target = centre + 0.9f * half.cwiseProduct(Vec3f(2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f,
+                                                                 2.0f * rng.uniform() - 1.0f));
+    coherent.emplace_back(eye, (target - eye).normalized());
+    const Vec3f u(2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f);
+    incoherent.emplace_back(centre + 1.2f * half.cwiseProduct(u), test::random_direction(rng));
+  }
+  for (std::vector<Ray>* rays : {&coherent, &incoherent}) {
+    std::vector<Ray>& r = *rays;
+    r[10].dir.y() = 0.0f;        // axis-parallel
+    r[20].tmin = -1.0f;          // tmin < 0
+    r[30].dir = Vec3f(0, 0, 0);  // invalid
+    r[40].org = centre + Vec3f(1e7f, 0, 0);
+    r[41].tmax = 0.2f * half.norm();
+    r.back().dir = Vec3f(0, 0, 0);
+  }
+  ASSERT_TRUE(batch_is_octant_coherent(coherent));
+  ASSERT_FALSE(batch_is_octant_coherent(incoherent));
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:node=q8", "bvh:tri=mt", "bvh:owalk=0"}) {
+    auto ahead = make_accelerator(spec);
+    ahead->build(s.mesh);
+    auto plain = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "ahead=0");
+    plain->build(s.mesh);
+    for (const std::vector<Ray>* rays : {&coherent, &incoherent}) {
+      const size_t n = rays->size();
+      std::vector<Hit> a(n), b(n);
+      std::vector<uint8_t> oa(n), ob(n);
+      ahead->intersect(*rays, a);
+      plain->intersect(*rays, b);
+      ahead->occluded(*rays, oa);
+      plain->occluded(*rays, ob);
+      size_t hits = 0;
+      for (size_t i = 0; i < n; ++i) {
+        hits += a[i].valid();
+        ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(Hit)), 0)
+            << spec << " ray " << i << ": ahead prim " << a[i].prim << " t " << a[i].t << ", plain prim " << b[i].prim;
+        ASSERT_EQ(oa[i], ob[i]) << spec << " ray " << i;
+      }
+      EXPECT_GT(hits, n / 4) << spec;
+      EXPECT_FALSE(a[30].valid());
+      EXPECT_FALSE(a.back().valid());
+    }
+  }
+  EXPECT_THROW(make_accelerator("bvh:ahead=0,layout=bvh2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:ahead=1,simd=0"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:ahead=2"), SpecError);
+}
+
 TEST(BvhOcclusionOrder, NeedsAWideLayout) {
   EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,layout=bvh2"), SpecError);
   EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,bound=sphere"), SpecError);

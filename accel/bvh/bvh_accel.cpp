@@ -71,6 +71,7 @@ struct BvhConfig {
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
   bool occlusion_order = false;  // aorder=rtsah: child slots ordered for any-hit walks (occlusion_order.h)
   bool octant_walks = true;  // owalk=1: coherent batches take octant-specialised walks (traverse_wide.h)
+  bool ahead = true;  // ahead=1: each ray's box-test scalars computed while the ray before walks (trace_rays_ahead)
 };
 
 int layout_width(LayoutKind l) {
@@ -130,8 +131,8 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
   static_assert(kFloatNodes || !kScalar, "simd=0 walks float nodes");
 
  public:
-  WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri, bool octant_walks = false)
-      : Batch(tri), bvh_(std::move(bvh)), packets_(packets), octant_walks_(octant_walks) {
+  WideKernel(WideBvh<N, W, Node> bvh, bool packets, TriangleTest tri, bool octant_walks = false, bool ahead = true)
+      : Batch(tri), bvh_(std::move(bvh)), packets_(packets), octant_walks_(octant_walks), ahead_(ahead) {
     view_ = WideView<N, W, Node>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref,
                                  wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.
@@ -149,28 +150,44 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
         return;
       }
     }
-    if (trace_octant_walks<false>(rays, stats, [&](size_t i, const Hit& h) { hits[i] = h; })) return;
+    if (trace_uncounted<false>(rays, stats, [&](size_t i, const Hit& h) { hits[i] = h; })) return;
     Batch::intersect(rays, hits, stats);
   }
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occ, TraversalStats* stats) const override {
-    if (trace_octant_walks<true>(rays, stats, [&](size_t i, const Hit& h) { occ[i] = h.valid(); })) return;
+    if (trace_uncounted<true>(rays, stats, [&](size_t i, const Hit& h) { occ[i] = h.valid(); })) return;
     Batch::occluded(rays, occ, stats);
   }
 
-  // Traces an uncounted watertight batch whose rays mostly share an octant
-  // through the octant walks, out(i, hit) per ray, and returns true; else
-  // false (counted batches keep the general walk, whose counters every
-  // structure shares). Kernels without octant walks never instantiate them.
+  // Traces an uncounted batch with vector tests, out(i, hit) per ray, each
+  // ray's box-test scalars computed while the ray before it walks
+  // (trace_rays_ahead), and returns true; a watertight batch whose rays
+  // mostly share an octant takes the octant walks. Else false: counted
+  // batches keep the shell's loop, whose counters every structure shares,
+  // and simd=0 its scalar kernel.
   template <bool kAnyHit, typename Out>
-  bool trace_octant_walks(std::span<const Ray> rays, TraversalStats* stats, Out&& out) const {
-    if constexpr (kOctantWalks) {
-      if (!octant_walks_ || stats || this->triangle_test() != TriangleTest::Watertight ||
-          !batch_is_octant_coherent(rays))
-        return false;
-      for (size_t i = 0; i < rays.size(); ++i) out(i, traverse_wide_octant<N, W, kAnyHit>(view_, rays[i]));
+  bool trace_uncounted(std::span<const Ray> rays, TraversalStats* stats, Out&& out) const {
+    if constexpr (kScalar) {
+      return false;
+    } else {
+      if (stats) return false;
+      if constexpr (kOctantWalks) {
+        if (octant_walks_ && this->triangle_test() == TriangleTest::Watertight && batch_is_octant_coherent(rays)) {
+          trace_rays_ahead(
+              rays, ahead_, [&](const Ray& r, const NodeRayScalars* a) { return traverse_wide_octant<N, W, kAnyHit>(view_, r, a); },
+              out);
+          return true;
+        }
+      }
+      dispatch_triangle_test(this->triangle_test(), [&]<TriangleTest kTest>() {
+        trace_rays_ahead(
+            rays, ahead_,
+            [&](const Ray& r, const NodeRayScalars* a) {
+              return traverse_wide<N, W, kAnyHit, false, false, kTest>(view_, r, nullptr, a);
+            },
+            out);
+      });
       return true;
     }
-    return false;
   }
 
   template <TriangleTest kTest, bool kAnyHit, bool kCount>
@@ -185,15 +202,17 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
   WideBvh<N, W, Node> bvh_;
   bool packets_;
   bool octant_walks_;
+  bool ahead_;
   WideView<N, W, Node> view_;
 };
 
 template <int N, int W, bool kScalar = false>
 std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMesh& mesh, bool packets,
-                                         TriangleTest tri, size_t& bytes, bool octant_walks = false) {
+                                         TriangleTest tri, size_t& bytes, bool octant_walks = false,
+                                         bool ahead = true) {
   const bool edges = tri == TriangleTest::MollerTrumbore;
   auto k = std::make_unique<WideKernel<N, W, kScalar>>(make_wide_bvh<N, W>(tree, mesh, edges), packets, tri,
-                                                     octant_walks);
+                                                     octant_walks, ahead);
   bytes = k->bytes();
   return k;
 }
@@ -201,10 +220,10 @@ std::unique_ptr<Kernel> make_wide_kernel(const WideTree& tree, const TriangleMes
 // node=q8: the same tree with compressed nodes.
 template <int W>
 std::unique_ptr<Kernel> make_quantized_kernel(const WideTree& tree, const TriangleMesh& mesh, TriangleTest tri,
-                                              size_t& bytes, QuantLooseness& looseness) {
+                                              size_t& bytes, QuantLooseness& looseness, bool ahead) {
   const bool edges = tri == TriangleTest::MollerTrumbore;
   auto k = std::make_unique<WideKernel<8, W, false, QuantNode8>>(
-      quantize_wide_bvh<W>(make_wide_bvh<8, W>(tree, mesh, edges), &looseness), false, tri);
+      quantize_wide_bvh<W>(make_wide_bvh<8, W>(tree, mesh, edges), &looseness), false, tri, false, ahead);
   bytes = k->bytes();
   return k;
 }
@@ -366,24 +385,24 @@ class BvhAccel final : public Accelerator {
     const bool packets = cfg_.packet == kPacketSize;
     if (cfg_.quantized) {  // bvh8, simd=1, packet=0 (checked by the spec parser)
       QuantLooseness loose;
-      if (block == 4) kernel_ = make_quantized_kernel<4>(wide, mesh, cfg_.tri, bytes, loose);
-      else if (block == 8) kernel_ = make_quantized_kernel<8>(wide, mesh, cfg_.tri, bytes, loose);
-      else kernel_ = make_quantized_kernel<16>(wide, mesh, cfg_.tri, bytes, loose);
+      if (block == 4) kernel_ = make_quantized_kernel<4>(wide, mesh, cfg_.tri, bytes, loose, cfg_.ahead);
+      else if (block == 8) kernel_ = make_quantized_kernel<8>(wide, mesh, cfg_.tri, bytes, loose, cfg_.ahead);
+      else kernel_ = make_quantized_kernel<16>(wide, mesh, cfg_.tri, bytes, loose, cfg_.ahead);
       s.extra["q8_area_ratio"] = loose.area_ratio();
     } else if (!cfg_.simd) {  // block=8 (checked by the spec parser)
       if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else if (cfg_.layout == LayoutKind::Bvh16) kernel_ = make_wide_kernel<16, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
     } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8, single rays (checked by the spec parser)
-      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
+      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
-      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
-      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
-      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks);
+      if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
+      else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
+      else kernel_ = make_wide_kernel<4, 16>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
     } else {
-      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
-      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
-      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks);
+      if (block == 4) kernel_ = make_wide_kernel<8, 4>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
+      else if (block == 8) kernel_ = make_wide_kernel<8, 8>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
+      else kernel_ = make_wide_kernel<8, 16>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
     }
     s.extra["simd_bits"] = simd::isa_bits();
     s.extra["block_width"] = block;
@@ -450,6 +469,10 @@ AcceleratorInfo bvh_accelerator_info() {
         "camera rays, walk with the node test specialised to each ray's octant) or 0 (the general walk for every batch; "
         "a study option, the same answers)",
         integer_of({0, 1})},
+       {"ahead", "1", "wide layouts with simd=1: 1 (each ray's box-test reciprocals and offsets computed while the ray "
+        "before it walks, so their latency hides behind that walk) or 0 (computed when the ray starts; a study option, "
+        "the same answers)",
+        integer_of({0, 1})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
       [](const Params& p) -> std::unique_ptr<Accelerator> {
@@ -502,6 +525,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.quantized = p.str("node") == "q8";
         c.occlusion_order = p.str("aorder") == "rtsah";
         c.octant_walks = p.integer("owalk") == 1;
+        c.ahead = p.integer("ahead") == 1;
         // layout=auto: 16-wide nodes where one AVX-512 instruction tests a
         // plane of all sixteen children and nothing in the spec needs 8-wide
         // ones (simd=0 follows, so that it stays the same tree with scalar
@@ -522,6 +546,8 @@ AcceleratorInfo bvh_accelerator_info() {
         if (c.layout == LayoutKind::Bvh16 && c.block != 8) throw SpecError("bvh: layout=bvh16 needs block=8");
         if (p.given("owalk") && (c.layout == LayoutKind::Bvh2 || c.quantized || !c.simd || c.block != 8))
           throw SpecError("bvh: owalk needs a wide layout with float nodes, block=8 and simd=1");
+        if (p.given("ahead") && (c.layout == LayoutKind::Bvh2 || !c.simd))
+          throw SpecError("bvh: ahead needs a wide layout and simd=1");
         if (c.quantized && (c.layout != LayoutKind::Bvh8 || c.packet != 0 || !c.simd))
           throw SpecError("bvh: node=q8 needs layout=bvh8, packet=0 and simd=1");
         if (c.tri != TriangleTest::Watertight && c.layout != LayoutKind::Bvh2 && (!c.simd || c.packet != 0))
