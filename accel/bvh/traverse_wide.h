@@ -143,13 +143,6 @@ inline bool ray_takes_fma_kernel(const Ray& r, float limit) {
 #endif
 }
 
-// Per-ray constants of the box test: the reciprocals of the slab test (as
-// SlabRay: safe reciprocals, or exact ones for axis_parallel rays, see
-// ray_is_axis_parallel) and the bounds of o * inv. Division is correctly
-// rounded in vector or scalar form, so the values are the scalar code's.
-// Built without branches when AVX is available: setup is a large share of a
-// short ray's cost. (The triangle test's constants: see the top of this file.)
-// inv_out (optional, 4 floats): the scalar reciprocals, for the triangle test's set-up.
 #if defined(__AVX__)
 // The box test's per-ray scalars in lanes x, y, z: reciprocals and the
 // bounds of o * inv (init_node_ray). A batch computes the next ray's while
@@ -182,8 +175,15 @@ struct NodeRayScalars {
 struct NodeRayScalars {};
 #endif
 
+// Per-ray constants of the box test: the reciprocals of the slab test (as
+// SlabRay: safe reciprocals, or exact ones for axis_parallel rays, see
+// ray_is_axis_parallel) and the bounds of o * inv. Division is correctly
+// rounded in vector or scalar form, so the values are the scalar code's.
+// Built without branches when AVX is available: setup is a large share of a
+// short ray's cost. (The triangle test's constants: see the top of this file.)
+// inv_out (optional, 4 floats): the scalar reciprocals, for the triangle test's set-up.
 // ahead (optional, AVX, rays that are not axis-parallel): the ray's
-// node_ray_scalars, computed before.
+// node_ray_scalars, computed before (trace_rays_ahead).
 template <int N>
 [[gnu::always_inline]] inline void init_node_ray(WideNodeRay<N>& node, const Ray& r, bool axis_parallel,
                                                  float* inv_out = nullptr,
