@@ -1515,9 +1515,10 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
 
 TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
   // bvh (ahead=1) computes each ray's box-test scalars while the ray before
-  // it walks (trace_rays_ahead); ahead=0 computes them when the ray starts.
-  // Every hit field and every occlusion answer must be equal, in coherent
-  // batches (octant walks) and incoherent ones (the general walk), with rays
+  // it walks (trace_rays_ahead) in coherent batches (octant walks, and the
+  // general walk of the specs without them); ahead=0 computes them when the
+  // ray starts, as incoherent batches always do. Every hit field and every
+  // occlusion answer must be equal, in coherent and incoherent batches, with rays
   // that leave the fast kernel (axis-parallel, tmin < 0, invalid, an origin
   // far beyond the scene) between ordinary ones, and as the last ray.
   const test::NamedMesh s = test::soup(2000, 31);

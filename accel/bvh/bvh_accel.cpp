@@ -158,20 +158,24 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
     Batch::occluded(rays, occ, stats);
   }
 
-  // Traces an uncounted batch with vector tests, out(i, hit) per ray, each
-  // ray's box-test scalars computed while the ray before it walks
-  // (trace_rays_ahead), and returns true; a watertight batch whose rays
-  // mostly share an octant takes the octant walks. Else false: counted
-  // batches keep the shell's loop, whose counters every structure shares,
-  // and simd=0 its scalar kernel.
+  // Traces an uncounted batch with vector tests, out(i, hit) per ray, and
+  // returns true. A batch whose rays mostly share an octant (camera rays,
+  // shadow rays towards one light) has each ray's box-test scalars computed
+  // while the ray before it walks (trace_rays_ahead), and if watertight takes
+  // the octant walks. Incoherent batches compute them when each ray starts:
+  // their walks are long, the set-up's latency a small part of them, and the
+  // hand-over's instructions measured 1-3 % slower there (docs/bvh-speed.md,
+  // session 23). Else false: counted batches keep the shell's loop, whose
+  // counters every structure shares, and simd=0 its scalar kernel.
   template <bool kAnyHit, typename Out>
   bool trace_uncounted(std::span<const Ray> rays, TraversalStats* stats, Out&& out) const {
     if constexpr (kScalar) {
       return false;
     } else {
       if (stats) return false;
+      const bool coherent = batch_is_octant_coherent(rays);
       if constexpr (kOctantWalks) {
-        if (octant_walks_ && this->triangle_test() == TriangleTest::Watertight && batch_is_octant_coherent(rays)) {
+        if (octant_walks_ && this->triangle_test() == TriangleTest::Watertight && coherent) {
           trace_rays_ahead(
               rays, ahead_, [&](const Ray& r, const NodeRayScalars* a) { return traverse_wide_octant<N, W, kAnyHit>(view_, r, a); },
               out);
@@ -180,7 +184,7 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
       }
       dispatch_triangle_test(this->triangle_test(), [&]<TriangleTest kTest>() {
         trace_rays_ahead(
-            rays, ahead_,
+            rays, ahead_ && coherent,
             [&](const Ray& r, const NodeRayScalars* a) {
               return traverse_wide<N, W, kAnyHit, false, false, kTest>(view_, r, nullptr, a);
             },
@@ -469,9 +473,9 @@ AcceleratorInfo bvh_accelerator_info() {
         "camera rays, walk with the node test specialised to each ray's octant) or 0 (the general walk for every batch; "
         "a study option, the same answers)",
         integer_of({0, 1})},
-       {"ahead", "1", "wide layouts with simd=1: 1 (each ray's box-test reciprocals and offsets computed while the ray "
-        "before it walks, so their latency hides behind that walk) or 0 (computed when the ray starts; a study option, "
-        "the same answers)",
+       {"ahead", "1", "wide layouts with simd=1: 1 (in batches whose rays mostly share a direction octant, such as camera "
+        "rays, each ray's box-test reciprocals and offsets are computed while the ray before it walks, so their latency "
+        "hides behind that walk) or 0 (computed when each ray starts; a study option, the same answers)",
         integer_of({0, 1})},
        simd_param("SIMD node and leaf tests",
                   " and counts; wide layouts need block=8; bvh2 is scalar either way")},
