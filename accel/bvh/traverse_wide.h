@@ -872,8 +872,9 @@ inline Hit traverse_wide_octant(const WideView<N, W, Node>& bvh, const Ray& ray,
 // are computed before the ray ahead of it walks, so their latency hides
 // behind that walk instead of delaying the first node test after the
 // mispredicted end of the walk before: camera rays +2 to +5 % in three of
-// four series, level in the fourth (docs/bvh-speed.md, session 23). Answers
-// are the same: the scalars are the ones init_node_ray computes.
+// five series, level in the two run on a quieter machine (docs/bvh-speed.md,
+// session 23). Answers are the same: the scalars are the ones init_node_ray
+// computes.
 // ahead = false (bvh:ahead=0, a study option): each ray's scalars when it
 // starts, as before.
 template <typename Walk, typename Out>
