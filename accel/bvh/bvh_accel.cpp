@@ -173,7 +173,8 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
       return false;
     } else {
       if (stats) return false;
-      const bool coherent = batch_is_octant_coherent(rays);
+      // The scan only where its answer is used.
+      const bool coherent = (ahead_ || (kOctantWalks && octant_walks_)) && batch_is_octant_coherent(rays);
       if constexpr (kOctantWalks) {
         if (octant_walks_ && this->triangle_test() == TriangleTest::Watertight && coherent) {
           trace_rays_ahead(

@@ -878,22 +878,19 @@ inline Hit traverse_wide_octant(const WideView<N, W, Node>& bvh, const Ray& ray,
 // ahead = false (bvh:ahead=0, a study option): each ray's scalars when it
 // starts, as before.
 template <typename Walk, typename Out>
-inline void trace_rays_ahead(std::span<const Ray> rays, bool ahead, Walk&& walk, Out&& out) {
-  if (!ahead) {
-    for (size_t i = 0; i < rays.size(); ++i) out(i, walk(rays[i], static_cast<const NodeRayScalars*>(nullptr)));
+inline void trace_rays_ahead(std::span<const Ray> rays, [[maybe_unused]] bool ahead, Walk&& walk, Out&& out) {
+#if defined(__AVX__)
+  if (ahead && !rays.empty()) {
+    NodeRayScalars next = node_ray_scalars(rays[0], false);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const NodeRayScalars cur = next;
+      if (i + 1 < rays.size()) next = node_ray_scalars(rays[i + 1], false);
+      out(i, walk(rays[i], &cur));
+    }
     return;
   }
-#if defined(__AVX__)
-  if (rays.empty()) return;
-  NodeRayScalars next = node_ray_scalars(rays[0], false);
-  for (size_t i = 0; i < rays.size(); ++i) {
-    const NodeRayScalars cur = next;
-    if (i + 1 < rays.size()) next = node_ray_scalars(rays[i + 1], false);
-    out(i, walk(rays[i], &cur));
-  }
-#else
-  for (size_t i = 0; i < rays.size(); ++i) out(i, walk(rays[i], static_cast<const NodeRayScalars*>(nullptr)));
 #endif
+  for (size_t i = 0; i < rays.size(); ++i) out(i, walk(rays[i], static_cast<const NodeRayScalars*>(nullptr)));
 }
 
 }  // namespace raylab
