@@ -17,6 +17,7 @@
 #include <type_traits>
 
 #include <fmt/format.h>
+#include <tbb/global_control.h>
 
 #include "accel/bvh/build_binned_sah.h"
 #include "accel/bvh/build_lbvh.h"
@@ -27,6 +28,7 @@
 #include "accel/bvh/collapse_wide.h"
 #include "accel/bvh/occlusion_order.h"
 #include "accel/bvh/optimize_reinsertion.h"
+#include "accel/bvh/presplit.h"
 #include "accel/bvh/quantized_node.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/traverse_packet.h"
@@ -123,7 +125,8 @@ std::vector<std::string> family_specs() {
         "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
         "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0",
-        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert"})
+        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert", "bvh:presplit=0.5",
+        "bvh:presplit=2,layout=bvh16,opt=reinsert", "bvh:presplit=0.3,layout=bvh2,opt=none"})
     specs.push_back(extra);
   return specs;
 }
@@ -731,6 +734,88 @@ TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
     }
   }
   EXPECT_EQ(uncovered, 0u);
+}
+
+// Pre-splitting (presplit.h): the pieces of each triangle lie inside its box
+// and cover it, the budget bounds the references, the long triangles are the
+// ones cut, and the result does not depend on the thread count.
+TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
+  // Long thin triangles across a box (they are what pre-splitting is for),
+  // with a few small ones and a degenerate one.
+  test::NamedMesh s = test::soup(300, 47, 3.0f);
+  TriangleMesh extra;
+  extra.vertices = {Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f),
+                    Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.51f, 0.5f, 0.5f), Vec3f(0.5f, 0.51f, 0.5f)};
+  extra.triangles = {{0, 1, 2}, {3, 4, 5}};
+  s.mesh.append(extra);
+  const size_t n = s.mesh.num_triangles();
+  PresplitOptions po;
+  po.budget = 0.5f;
+  PresplitStats st;
+  const std::vector<BuildRef> refs = presplit_references(s.mesh, po, &st);
+  EXPECT_EQ(st.references, refs.size());
+  EXPECT_GT(refs.size(), n + n / 4) << "most of the budget is spent on a scene of long triangles";
+  EXPECT_LE(refs.size(), n + static_cast<size_t>(0.5 * n)) << "split budget";
+  EXPECT_GT(st.triangles_split, 20u);
+  std::map<uint32_t, std::vector<Aabb>> boxes_of;
+  for (const BuildRef& r : refs) {
+    const Aabb b = r.box.aabb();
+    ASSERT_LT(r.prim(), n);
+    ASSERT_FALSE(b.is_empty());
+    EXPECT_TRUE(s.mesh.triangle_bounds(r.prim()).contains(b)) << "piece of triangle " << r.prim();
+    const Vec3f c = b.center();
+    alignas(16) float cv[4];
+    _mm_store_ps(cv, r.centroid());
+    EXPECT_EQ(Vec3f(cv[0], cv[1], cv[2]), c) << "a piece's centroid is its box's centre";
+    boxes_of[r.prim()].push_back(b);
+  }
+  ASSERT_EQ(boxes_of.size(), n) << "every triangle keeps at least one reference";
+  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 2)].size(), 1u) << "a point triangle is not cut";
+  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 1)].size(), 1u) << "a tiny triangle is not cut";
+  Pcg32 rng(5, 7);
+  size_t uncovered = 0;
+  for (uint32_t prim = 0; prim < n; ++prim) {
+    const Vec3f a = s.mesh.vertex(prim, 0), b = s.mesh.vertex(prim, 1), c = s.mesh.vertex(prim, 2);
+    for (int i = 0; i < 200; ++i) {
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+      if (i < 3) u = i == 1, v = i == 2;
+      const Vec3f q = (1.0f - u - v) * a + u * b + v * c;
+      const float tol = 4e-7f * q.cwiseAbs().maxCoeff() + 1e-30f;
+      bool covered = false;
+      for (const Aabb& box : boxes_of[prim])
+        covered |= (q.array() >= box.lo.array() - tol).all() && (q.array() <= box.hi.array() + tol).all();
+      uncovered += !covered;
+    }
+  }
+  EXPECT_EQ(uncovered, 0u);
+  // One thread and the default pool give the same references.
+  std::vector<BuildRef> serial;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    serial = presplit_references(s.mesh, po);
+  }
+  ASSERT_EQ(serial.size(), refs.size());
+  for (size_t i = 0; i < refs.size(); ++i) {
+    EXPECT_EQ(serial[i].prim(), refs[i].prim()) << i;
+    EXPECT_EQ(serial[i].box.aabb().lo, refs[i].box.aabb().lo) << i;
+    EXPECT_EQ(serial[i].box.aabb().hi, refs[i].box.aabb().hi) << i;
+  }
+  // No budget: one reference per triangle, its whole box.
+  po.budget = 0.0f;
+  const std::vector<BuildRef> plain = presplit_references(s.mesh, po);
+  ASSERT_EQ(plain.size(), n);
+  for (size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(plain[i].prim(), i);
+    EXPECT_EQ(plain[i].box.aabb().lo, s.mesh.triangle_bounds(i).lo);
+    EXPECT_EQ(plain[i].box.aabb().hi, s.mesh.triangle_bounds(i).hi);
+  }
+}
+
+TEST(BvhPresplit, SpecNeedsTheBinnedBuilder) {
+  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,presplit=0.2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:presplit=5"), SpecError);
+  EXPECT_NO_THROW(make_accelerator("bvh:builder=sweep,presplit=0"));
 }
 
 TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {

@@ -26,6 +26,7 @@
 #include "accel/bvh/build_sbvh.h"
 #include "accel/bvh/build_sweep_sah.h"
 #include "accel/bvh/optimize_reinsertion.h"
+#include "accel/bvh/presplit.h"
 #include "accel/bvh/quantized_node.h"
 #include "accel/bvh/bvh2_layout.h"
 #include "accel/bvh/occlusion_order.h"
@@ -60,6 +61,7 @@ struct BvhConfig {
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
   int spatial_bins = 32;      // SBVH: slabs per axis
+  float presplit = 0.0f;      // binned: pre-split budget, extra references / triangles (presplit.h)
   int opt_rounds = 4;         // reinsertion rounds (work, not time; auto: light 4, reinsert 32)
   double opt_batch = 0.005;   // reinsertion: nodes considered per round, a fraction of all nodes (auto: light 0.005, reinsert 0.15)
   float node_cost = 2.0f;   // collapse: cost of a node visit
@@ -302,7 +304,13 @@ class BvhAccel final : public Accelerator {
     std::vector<Aabb> boxes;
     std::vector<Vec3f> centroids;
     std::vector<BuildRef> refs;
-    if (cfg_.builder == BuilderKind::Binned) {
+    if (cfg_.builder == BuilderKind::Binned && cfg_.presplit > 0.0f) {
+      PresplitOptions po;
+      po.budget = cfg_.presplit;
+      PresplitStats ps;
+      refs = presplit_references(mesh, po, &ps);
+      s.extra["presplit_triangles"] = static_cast<double>(ps.triangles_split);
+    } else if (cfg_.builder == BuilderKind::Binned) {
       refs.resize(n);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
@@ -450,6 +458,10 @@ AcceleratorInfo bvh_accelerator_info() {
        {"sbudget", "0.5", "sbvh: split budget, extra references as a fraction of the triangle count", real_in(0, 4).as_float()},
        {"smin", "0", "sbvh: try spatial splits only at nodes with at least this many references",
         integer_in(0, kUnbounded)},
+       {"presplit", "0", "binned: pre-split budget, extra references as a fraction of the triangle count; the "
+        "triangles whose boxes exceed them most, near the coarsest planes of the scene's dyadic grid, are cut there "
+        "before the build (Karras & Aila 2013)",
+        real_in(0, 4).as_float()},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)", integer_in(2, 256)},
        {"opt_rounds", "auto", "reinsertion: at most this many rounds (auto: light 4, reinsert 32; work-bounded: the tree "
         "does not depend on machine load)",
@@ -522,6 +534,9 @@ AcceleratorInfo bvh_accelerator_info() {
         c.opt_batch = p.str("opt_batch") == "auto" ? (light ? 0.005 : 0.15) : p.real("opt_batch");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
+        c.presplit = static_cast<float>(p.real("presplit"));
+        if (p.given("presplit") && c.builder != BuilderKind::Binned && c.presplit > 0.0f)
+          throw SpecError("bvh: presplit needs builder=binned");
         c.node_cost = static_cast<float>(p.real("ct"));
         c.block_cost = static_cast<float>(p.real("ci"));
         c.tri = parse_triangle_test(p);
@@ -565,15 +580,16 @@ AcceleratorInfo bvh_accelerator_info() {
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
                 "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt",
-                "bvh:layout=bvh16", "bvh:layout=bvh8"};
+                "bvh:layout=bvh16", "bvh:layout=bvh8", "bvh:presplit=0.3"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},
                 {"ms_measure", "ms: measuring the binary tree"},
                 {"ms_collapse", "ms: SAH-optimal collapse to the layout's width"},
                 {"ms_layout", "ms: the traversal layout (nodes, triangle blocks)"},
-                {"refs_per_triangle", "references per triangle (sbvh duplicates split triangles)"},
+                {"refs_per_triangle", "references per triangle (sbvh and presplit duplicate split triangles)"},
                 {"spatial_splits", "sbvh: spatial splits taken"},
+                {"presplit_triangles", "presplit: triangles cut before the build"},
                 {"sah_tree", "SAH cost of the binary tree before the collapse (reporting constants)"},
                 {"sah_before_opt", "reinsert: SAH cost before"},
                 {"sah_after_opt", "reinsert: SAH cost after"},
