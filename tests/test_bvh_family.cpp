@@ -697,6 +697,29 @@ TEST(BvhSbvh, CoincidentTrianglesDoNotSpendTheSplitBudget) {
   EXPECT_EQ(t.prim_ids.size(), s.mesh.num_triangles());
 }
 
+// Points of every triangle (its vertices and 197 random ones) that lie in
+// none of the boxes given for it: 0 when the boxes cover their triangles.
+size_t uncovered_points(const TriangleMesh& mesh, std::map<uint32_t, std::vector<Aabb>>& boxes_of) {
+  Pcg32 rng(5, 7);
+  size_t uncovered = 0;
+  for (uint32_t prim = 0; prim < mesh.num_triangles(); ++prim) {
+    const Vec3f a = mesh.vertex(prim, 0), b = mesh.vertex(prim, 1), c = mesh.vertex(prim, 2);
+    for (int i = 0; i < 200; ++i) {
+      float u = rng.uniform(), v = rng.uniform();
+      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+      if (i < 3) u = i == 1, v = i == 2;  // the vertices themselves
+      // Points are rounded in float; allow that rounding.
+      const Vec3f q = (1.0f - u - v) * a + u * b + v * c;
+      const float tol = 4e-7f * q.cwiseAbs().maxCoeff() + 1e-30f;
+      bool covered = false;
+      for (const Aabb& box : boxes_of[prim])
+        covered |= (q.array() >= box.lo.array() - tol).all() && (q.array() <= box.hi.array() + tol).all();
+      uncovered += !covered;
+    }
+  }
+  return uncovered;
+}
+
 TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   // Long thin triangles across a box: the case spatial splits exist for.
   const test::NamedMesh s = test::soup(300, 47, 3.0f);
@@ -716,24 +739,7 @@ TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   for (const Bvh2Node& n : t.nodes)
     if (is_leaf(n))
       for (uint32_t k = n.index; k < n.index + n.count; ++k) boxes_of[t.prim_ids[k]].push_back(n.bounds());
-  Pcg32 rng(5, 7);
-  size_t uncovered = 0;
-  for (uint32_t prim = 0; prim < s.mesh.num_triangles(); ++prim) {
-    const Vec3f a = s.mesh.vertex(prim, 0), b = s.mesh.vertex(prim, 1), c = s.mesh.vertex(prim, 2);
-    for (int i = 0; i < 200; ++i) {
-      float u = rng.uniform(), v = rng.uniform();
-      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
-      if (i < 3) u = i == 1, v = i == 2;  // the vertices themselves
-      // Points are rounded in float; allow that rounding.
-      const Vec3f q = (1.0f - u - v) * a + u * b + v * c;
-      const float tol = 4e-7f * q.cwiseAbs().maxCoeff() + 1e-30f;
-      bool covered = false;
-      for (const Aabb& box : boxes_of[prim])
-        covered |= (q.array() >= box.lo.array() - tol).all() && (q.array() <= box.hi.array() + tol).all();
-      uncovered += !covered;
-    }
-  }
-  EXPECT_EQ(uncovered, 0u);
+  EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
 }
 
 // Pre-splitting (presplit.h): the pieces of each triangle lie inside its box
@@ -772,23 +778,7 @@ TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
   ASSERT_EQ(boxes_of.size(), n) << "every triangle keeps at least one reference";
   EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 2)].size(), 1u) << "a point triangle is not cut";
   EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 1)].size(), 1u) << "a tiny triangle is not cut";
-  Pcg32 rng(5, 7);
-  size_t uncovered = 0;
-  for (uint32_t prim = 0; prim < n; ++prim) {
-    const Vec3f a = s.mesh.vertex(prim, 0), b = s.mesh.vertex(prim, 1), c = s.mesh.vertex(prim, 2);
-    for (int i = 0; i < 200; ++i) {
-      float u = rng.uniform(), v = rng.uniform();
-      if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
-      if (i < 3) u = i == 1, v = i == 2;
-      const Vec3f q = (1.0f - u - v) * a + u * b + v * c;
-      const float tol = 4e-7f * q.cwiseAbs().maxCoeff() + 1e-30f;
-      bool covered = false;
-      for (const Aabb& box : boxes_of[prim])
-        covered |= (q.array() >= box.lo.array() - tol).all() && (q.array() <= box.hi.array() + tol).all();
-      uncovered += !covered;
-    }
-  }
-  EXPECT_EQ(uncovered, 0u);
+  EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
   // One thread and the default pool give the same references.
   std::vector<BuildRef> serial;
   {
