@@ -759,7 +759,6 @@ TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
   po.budget = 0.5f;
   PresplitStats st;
   const std::vector<BuildRef> refs = presplit_references(s.mesh, po, &st);
-  EXPECT_EQ(st.references, refs.size());
   EXPECT_GT(refs.size(), n + n / 4) << "most of the budget is spent on a scene of long triangles";
   EXPECT_LE(refs.size(), n + static_cast<size_t>(0.5 * n)) << "split budget";
   EXPECT_GT(st.triangles_split, 20u);

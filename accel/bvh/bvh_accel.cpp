@@ -304,20 +304,13 @@ class BvhAccel final : public Accelerator {
     std::vector<Aabb> boxes;
     std::vector<Vec3f> centroids;
     std::vector<BuildRef> refs;
-    if (cfg_.builder == BuilderKind::Binned && cfg_.presplit > 0.0f) {
+    if (cfg_.builder == BuilderKind::Binned) {
+      // presplit=0 (the default): one reference per triangle, its box.
       PresplitOptions po;
       po.budget = cfg_.presplit;
       PresplitStats ps;
       refs = presplit_references(mesh, po, &ps);
-      s.extra["presplit_triangles"] = static_cast<double>(ps.triangles_split);
-    } else if (cfg_.builder == BuilderKind::Binned) {
-      refs.resize(n);
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          const Aabb b = mesh.triangle_bounds(i);
-          refs[i] = BuildRef::make(b, b.center(), static_cast<uint32_t>(i));
-        }
-      });
+      if (cfg_.presplit > 0.0f) s.extra["presplit_triangles"] = static_cast<double>(ps.triangles_split);
     } else {
       boxes.resize(n);
       centroids.resize(n);
@@ -535,7 +528,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
         c.presplit = static_cast<float>(p.real("presplit"));
-        if (p.given("presplit") && c.builder != BuilderKind::Binned && c.presplit > 0.0f)
+        if (c.presplit > 0.0f && c.builder != BuilderKind::Binned)
           throw SpecError("bvh: presplit needs builder=binned");
         c.node_cost = static_cast<float>(p.real("ct"));
         c.block_cost = static_cast<float>(p.real("ci"));

@@ -34,12 +34,13 @@ struct PresplitOptions {
 
 struct PresplitStats {
   size_t triangles_split = 0;   // triangles cut at least once
-  size_t references = 0;        // references returned (>= triangles)
 };
 
 // One reference per triangle, plus the pieces of the triangles the budget
-// splits (a triangle's pieces replace its own reference). Deterministic: the
-// same mesh and options give the same references in the same order.
+// splits (a triangle's pieces replace its own reference); with no budget,
+// one reference per triangle with its whole box (the binned build's input).
+// Deterministic: the same mesh and options give the same references in the
+// same order. The mesh must be validated (finite vertices).
 std::vector<BuildRef> presplit_references(const TriangleMesh& mesh, const PresplitOptions& options,
                                           PresplitStats* stats = nullptr);
 
