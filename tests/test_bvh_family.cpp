@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -30,6 +31,8 @@
 #include "accel/bvh/optimize_reinsertion.h"
 #include "accel/bvh/presplit.h"
 #include "accel/bvh/quantized_node.h"
+#include "accel/bvh/sah_binning.h"
+#include "accel/bvh/small_sweep.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/traverse_packet.h"
 #include "accel/bvh/triangle_block.h"
@@ -398,6 +401,111 @@ TEST(BvhBuilders, SmallRangesWithTiedCentroidsKeepEveryTriangle) {
   for (int threshold : {1, 2, 3, 4}) {
     SCOPED_TRACE(threshold);
     check_binary_tree(build_with("binned", m, threshold), m, false);
+  }
+}
+
+// The small-node sweep's fast path (AVX-512 registers where built for it)
+// must choose exactly what the portable sweep chooses: the same orders, axis,
+// position and cost bits, so that the tree does not depend on the ISA. And
+// the portable sweep must choose the cheapest split by a plain recount. Sets
+// of 2..16 references: random boxes, centroids tied on a lattice (-0 beside
+// +0), flat and point boxes, identical references, and coordinates near the
+// float limit whose extents overflow (infinite and NaN costs).
+TEST(BvhBuilders, SmallSweepChoosesTheCheapestSplitOnEveryPath) {
+  Pcg32 rng(41, 7);
+  const float lattice[] = {-1.0f, -0.0f, 0.0f, 1.0f};
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int n = 2 + trial % 15;
+    const int kind = (trial / 15) % 5;
+    std::vector<BuildRef> refs;
+    for (int i = 0; i < n; ++i) {
+      Vec3f lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        float l = 0.0f, h = 0.0f;
+        switch (kind) {
+          case 0: l = rng.uniform() * 10.0f - 5.0f; h = l + rng.uniform() * 3.0f; break;
+          case 1: l = lattice[rng.next() % 4]; h = l + ((rng.next() % 2) ? 0.5f : 0.0f); break;
+          case 2: l = h = lattice[rng.next() % 4]; break;                        // points and flat boxes
+          case 3: l = -1.0f; h = 2.0f; break;                                    // identical references
+          default: l = (rng.next() % 2 ? 1.0f : -1.0f) * 3.0e38f * rng.uniform();  // overflowing extents
+                   h = (rng.next() % 3) ? l : std::max(l, 3.0e38f * rng.uniform());
+        }
+        lo[a] = l;
+        hi[a] = h;
+      }
+      const Aabb box(lo, hi);
+      refs.push_back(BuildRef::make(box, box.center(), static_cast<uint32_t>(i)));
+    }
+    SCOPED_TRACE(fmt::format("trial {} n {} kind {}", trial, n, kind));
+    uint8_t fast_order[3][sah::kSmallSweepMax], order[3][sah::kSmallSweepMax];
+    const sah::SmallSplit fast = sah::choose_small_split(refs.data(), n, fast_order);
+    const sah::SmallSplit ref = sah::choose_small_split_scalar(refs.data(), n, order);
+    ASSERT_EQ(fast.axis, ref.axis);
+    ASSERT_EQ(fast.pos, ref.pos);
+    ASSERT_EQ(std::bit_cast<uint32_t>(fast.cost), std::bit_cast<uint32_t>(ref.cost));
+    for (int a = 0; a < 3; ++a) ASSERT_TRUE(std::equal(order[a], order[a] + n, fast_order[a])) << "axis " << a;
+    ASSERT_GE(ref.axis, 0);
+    ASSERT_LE(ref.axis, 2);
+    ASSERT_GE(ref.pos, 1);
+    ASSERT_LT(ref.pos, n);
+    // The orders: permutations, sorted by centroid (ties by index).
+    for (int a = 0; a < 3; ++a) {
+      std::vector<int> seen(n, 0);
+      for (int i = 0; i < n; ++i) seen[order[a][i]]++;
+      ASSERT_EQ(std::count(seen.begin(), seen.end(), 1), n);
+      for (int i = 1; i < n; ++i) {
+        const float p = refs[order[a][i - 1]].box.aabb().center()[a], q = refs[order[a][i]].box.aabb().center()[a];
+        ASSERT_TRUE(p < q || (p == q && order[a][i - 1] < order[a][i]) || std::signbit(p) != std::signbit(q))
+            << "axis " << a << " position " << i;
+      }
+    }
+    // The cost recounted, and no split of any axis cheaper.
+    const auto split_cost = [&](int a, int pos) {
+      Box4 l, r;
+      for (int i = 0; i < n; ++i) (i < pos ? l : r).extend(refs[order[a][i]].box);
+      const float c = l.half_area() * static_cast<float>(pos) + r.half_area() * static_cast<float>(n - pos);
+      return c == c ? c : std::numeric_limits<float>::infinity();
+    };
+    ASSERT_EQ(std::bit_cast<uint32_t>(split_cost(ref.axis, ref.pos)), std::bit_cast<uint32_t>(ref.cost));
+    for (int a = 0; a < 3; ++a)
+      for (int pos = 1; pos < n; ++pos) ASSERT_GE(split_cost(a, pos), ref.cost) << "axis " << a << " pos " << pos;
+  }
+}
+
+// The partitions test a reference against a bin boundary with one scalar
+// lane (Binning::left_of) and must agree with the bins the SAH counted
+// (Binning::bins_of), or a child's box (taken from its bins) would miss a
+// reference: centroids inside, on and outside the binned bounds, NaN, and
+// the largest floats.
+TEST(BvhBuilders, BoundaryTestAgreesWithTheBins) {
+  Pcg32 rng(5, 11);
+  Box4 cb;
+  cb.extend(_mm_setr_ps(-2.0f, 0.0f, 1.0e-3f, 0.0f));
+  cb.extend(_mm_setr_ps(6.0f, 1.0e-30f, 3.0e38f, 0.0f));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int bins : {2, 8, 16, 64, 256}) {
+    const sah::Binning bn(cb, bins);
+    for (int t = 0; t < 20000; ++t) {
+      float c[3];
+      for (int a = 0; a < 3; ++a) {
+        const float lo = cb.lo_at(a), hi = cb.hi_at(a);
+        switch (rng.next() % 6) {
+          case 0: c[a] = lo; break;
+          case 1: c[a] = hi; break;
+          case 2: c[a] = lo - (hi - lo) * rng.uniform(); break;
+          case 3: c[a] = (rng.next() % 2 ? 1.0f : -1.0f) * std::numeric_limits<float>::max(); break;
+          case 4: c[a] = (t % 97 == 0) ? nan : lo + (hi - lo) * rng.uniform(); break;
+          default: c[a] = lo + (hi - lo) * (std::floor(rng.uniform() * bins) / bins);  // on a bin boundary
+        }
+      }
+      const BuildRef r = BuildRef::make(Aabb(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), Vec3f(c[0], c[1], c[2]), 0);
+      alignas(16) int32_t bin[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(bin), bn.bins_of(r));
+      for (int a = 0; a < 3; ++a)
+        for (int pos = 1; pos < bins; ++pos)
+          ASSERT_EQ(bn.left_of(r, a, pos), bin[a] < pos)
+              << "bins " << bins << " axis " << a << " centroid " << c[a] << " pos " << pos;
+    }
   }
 }
 

@@ -387,7 +387,7 @@ class SbvhBuilder {
     if (!done && object.axis >= 0 && depth < kForceMedianDepth) {
       left.reserve(object.left_count);
       right.reserve(n - object.left_count);
-      for (const BuildRef& r : refs) (bn->bin_of(r, object.axis) < object.pos ? left : right).push_back(r);
+      for (const BuildRef& r : refs) (bn->left_of(r, object.axis, object.pos) ? left : right).push_back(r);
       done = !left.empty() && !right.empty();
       if (!done) {
         left.clear();

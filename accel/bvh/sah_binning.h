@@ -3,7 +3,7 @@
 // binned builder and SBVH's object splits: references are binned by centroid
 // along each axis, and every bin boundary is a split candidate. Large ranges
 // bin in parallel (TBB reduction of per-chunk bin sets).
-#include <emmintrin.h>
+#include <immintrin.h>
 #if defined(__SSE4_1__)
 #include <smmintrin.h>
 #endif
@@ -26,6 +26,36 @@ inline constexpr size_t kParallelBinSize = 32768;  // ranges at least this large
 // the bins it uses, which matters because most nodes are small.
 template <int kBins>
 struct BinBoxes {
+#if defined(__AVX__)
+  // A bin's box as one 256-bit value, lo in the low half and -hi in the
+  // high half, so that growing a bin is one min with one load and one store
+  // (binning is a fifth of the build). With the bin as the first operand the
+  // results are exactly min(lo, box.lo) and max(hi, box.hi): on equal values
+  // (+0 and -0) both return the second operand, and negation is exact.
+  __m256 bound[3][kBins];
+
+  static __m256 pack(const Box4& box) {
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(box.lo), _mm_xor_ps(box.hi, sign), 1);
+  }
+  void reset(int bins) {
+    const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());  // lo = +inf, hi = -inf
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) bound[a][b] = empty;
+  }
+  void grow_packed(int axis, int bin, __m256 packed) { bound[axis][bin] = _mm256_min_ps(bound[axis][bin], packed); }
+  void grow(int axis, int bin, const Box4& box) { grow_packed(axis, bin, pack(box)); }
+  Box4 box(int axis, int bin) const {
+    Box4 r;
+    r.lo = _mm256_castps256_ps128(bound[axis][bin]);
+    r.hi = _mm_xor_ps(_mm256_extractf128_ps(bound[axis][bin], 1), _mm_set1_ps(-0.0f));
+    return r;
+  }
+  void merge_boxes(const BinBoxes& o, int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) bound[a][b] = _mm256_min_ps(bound[a][b], o.bound[a][b]);
+  }
+#else
   __m128 lo[3][kBins];
   __m128 hi[3][kBins];
 
@@ -55,6 +85,7 @@ struct BinBoxes {
         hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
       }
   }
+#endif
 };
 
 // Object bins: boxes and reference counts.
@@ -84,11 +115,13 @@ struct BinSet : BinBoxes<kMaxBins> {
 struct Binning {
   __m128 lo;
   __m128 scale;
+  alignas(16) float lo_s[4];
   alignas(16) float scale_s[4];
   __m128i max_bin;
 
   Binning(const Box4& cbounds, int bins) {
     lo = cbounds.lo;
+    _mm_store_ps(lo_s, lo);
     alignas(16) float ext[4];
     _mm_store_ps(ext, _mm_sub_ps(cbounds.hi, cbounds.lo));
     for (int a = 0; a < 3; ++a)
@@ -108,10 +141,15 @@ struct Binning {
     return _mm_andnot_si128(_mm_cmplt_epi32(clipped, _mm_setzero_si128()), clipped);
 #endif
   }
-  int bin_of(const BuildRef& r, int axis) const {
-    alignas(16) int32_t v[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(v), bins_of(r));
-    return v[axis];
+  // bins_of(r)[axis] < pos for a split boundary pos in [1, bins - 1], one
+  // scalar lane instead of the conversion: with x = (c - lo) * scale as
+  // bins_of computes it, trunc(x) < pos exactly when x < pos for
+  // 0 <= x < 2^31, and x < 0, x >= 2^31 and NaN all land in bin 0 (the
+  // conversion gives INT_MIN for the last two). The partitions rely on this
+  // matching the bins exactly: the children's boxes come from the bins.
+  bool left_of(const BuildRef& r, int axis, int pos) const {
+    const float x = (reinterpret_cast<const float*>(&r.c)[axis] - lo_s[axis]) * scale_s[axis];
+    return !(x >= static_cast<float>(pos)) || x >= 2147483648.0f;
   }
 };
 
@@ -127,7 +165,15 @@ struct Split {
 inline void bin_one(const BuildRef& r, const Binning& bn, BinSet& bins) {
   alignas(16) int32_t idx[4];
   _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
+#if defined(__AVX__)
+  const __m256 packed = BinSet::pack(r.box);
+  for (int a = 0; a < 3; ++a) {
+    bins.grow_packed(a, idx[a], packed);
+    bins.count[a][idx[a]]++;
+  }
+#else
   for (int a = 0; a < 3; ++a) bins.add(a, idx[a], r.box);
+#endif
 }
 
 // Bins refs[b, e) into `bins` (which must be initialised for nbins). Long
@@ -141,14 +187,9 @@ inline void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& b
   thread_local std::unique_ptr<BinSet> second;
   if (!second) second.reset(new BinSet);
   BinSet& other = *second;
-  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
-  const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  other.reset(nbins);
   for (int a = 0; a < 3; ++a)
-    for (int k = 0; k < nbins; ++k) {
-      other.lo[a][k] = inf;
-      other.hi[a][k] = ninf;
-      other.count[a][k] = 0;
-    }
+    for (int k = 0; k < nbins; ++k) other.count[a][k] = 0;
   size_t i = b;
   for (; i + 1 < e; i += 2) {
     bin_one(refs[i], bn, bins);
