@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "accel/bvh/huge_page_allocator.h"
 #include "accel/core/sah_report.h"
 #include "base/aabb.h"
 
@@ -31,7 +32,10 @@ static_assert(sizeof(Bvh2Node) == 32, "Bvh2Node must stay 32 bytes");
 // The canonical binary tree every builder produces: node 0 is the root; leaves
 // refer to ranges of prim_ids. Other layouts are converted from it.
 struct BinaryBvh {
-  std::vector<Bvh2Node> nodes;
+  // Huge pages: tens of megabytes written once per build (builders, the
+  // reinsertion's relayout), where first touches of 4 KiB pages cost about
+  // three times as much as of 2 MiB ones (1.2 us a page on the Intel VM).
+  HugePageVector<Bvh2Node> nodes;
   std::vector<uint32_t> prim_ids;
 };
 

@@ -116,7 +116,7 @@ CellBvhForest build_cell_bvhs(const TopGrid& g, int leaf) {
     bo.max_leaf = leaf;
     bo.leaf_threshold = 1;
     BinaryBvh tree = build_binned_sah(std::move(refs), bo);
-    p.nodes = std::move(tree.nodes);
+    p.nodes.assign(tree.nodes.begin(), tree.nodes.end());  // a small tree per cell, joined into one array below
     p.tris.reserve(tree.prim_ids.size());
     for (const uint32_t id : tree.prim_ids) p.tris.push_back(g.tris[id]);
   });
