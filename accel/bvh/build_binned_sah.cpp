@@ -48,16 +48,17 @@ class BinnedBuilder {
       start_binary_bvh(out_, n);
       return std::move(out_);
     }
-    // Nodes go to uninitialised storage for the worst case (2n - 1), and only
-    // the ones used are copied out: filling 2n nodes first and touching them
-    // page by page cost more than the copy.
-    nodes_ = HugePageBuffer<Bvh2Node>(2 * n);
+    // Room for the worst case (2n - 1 nodes), not written (BinaryBvh::nodes
+    // does not zero): only the pages of the nodes used are ever touched, and
+    // the array is shrunk to them, with no second copy.
+    out_.nodes.resize(2 * n);
+    nodes_ = out_.nodes.data();
     out_.prim_ids.resize(n);
     if (n >= kParallelPartitionSize) scratch_ = HugePageBuffer<BuildRef>(n);
     Box4 bounds, cbounds;
     compute_bounds(refs_.data(), 0, n, bounds, cbounds);
     build(0, 0, n, bounds, cbounds, opt_.start_depth, refs_.data(), scratch_.data());
-    out_.nodes.assign(nodes_.data(), nodes_.data() + next_node_.load());
+    out_.nodes.resize(next_node_.load());
     return std::move(out_);
   }
 
@@ -264,7 +265,7 @@ class BinnedBuilder {
   // The parallel partition's target (ranges of kParallelPartitionSize
   // references or more), uninitialised: every element is written before it is read.
   HugePageBuffer<BuildRef> scratch_;
-  HugePageBuffer<Bvh2Node> nodes_;
+  Bvh2Node* nodes_ = nullptr;  // out_.nodes.data()
   BuildOptions opt_;
   BinaryBvh out_;
   std::atomic<uint32_t> next_node_{1};

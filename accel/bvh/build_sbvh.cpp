@@ -472,7 +472,7 @@ class SbvhBuilder {
   std::span<const Vec3f> centroids_;
   const PrimitiveSplitter& splitter_;
   SbvhOptions opt_;
-  HugePageVector<Bvh2Node> nodes_;
+  UninitHugePageVector<Bvh2Node> nodes_;
   std::vector<uint32_t> prims_;
   float root_area_ = 0.0f;
   std::atomic<int64_t> budget_{0};

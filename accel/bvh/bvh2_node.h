@@ -35,7 +35,10 @@ struct BinaryBvh {
   // Huge pages: tens of megabytes written once per build (builders, the
   // reinsertion's relayout), where first touches of 4 KiB pages cost about
   // three times as much as of 2 MiB ones (1.2 us a page on the Intel VM).
-  HugePageVector<Bvh2Node> nodes;
+  // Not zeroed: builders size the array for the worst case (2n - 1 nodes)
+  // and write the nodes they use, then shrink it; each writes every node
+  // below the final size.
+  UninitHugePageVector<Bvh2Node> nodes;
   std::vector<uint32_t> prim_ids;
 };
 

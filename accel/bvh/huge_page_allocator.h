@@ -55,6 +55,33 @@ struct HugePageAllocator {
 template <typename T>
 using HugePageVector = std::vector<T, HugePageAllocator<T>>;
 
+// HugePageAllocator whose vectors default-initialise: resize() leaves trivial
+// elements unwritten (and their pages untouched) instead of zeroing them, for
+// arrays a builder sizes for the worst case and writes in part (every element
+// below the final size must be written before it is read).
+template <typename T>
+struct UninitHugePageAllocator : HugePageAllocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = UninitHugePageAllocator<U>;
+  };
+  UninitHugePageAllocator() = default;
+  template <typename U>
+  UninitHugePageAllocator(const UninitHugePageAllocator<U>&) {}
+
+  template <typename U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+template <typename T>
+using UninitHugePageVector = std::vector<T, UninitHugePageAllocator<T>>;
+
 // Uninitialised storage for n objects from HugePageAllocator, for the
 // builders' large temporary tables whose every element is written before it
 // is read: a vector would first fill them, and with 4 KiB pages the first
