@@ -8,6 +8,7 @@
 #include <smmintrin.h>
 #endif
 
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -148,7 +149,9 @@ struct Binning {
   // conversion gives INT_MIN for the last two). The partitions rely on this
   // matching the bins exactly: the children's boxes come from the bins.
   bool left_of(const BuildRef& r, int axis, int pos) const {
-    const float x = (reinterpret_cast<const float*>(&r.c)[axis] - lo_s[axis]) * scale_s[axis];
+    float c;
+    std::memcpy(&c, reinterpret_cast<const char*>(&r.c) + sizeof(float) * static_cast<size_t>(axis), sizeof c);
+    const float x = (c - lo_s[axis]) * scale_s[axis];
     return !(x >= static_cast<float>(pos)) || x >= 2147483648.0f;
   }
 };
