@@ -173,7 +173,6 @@ class BinnedBuilder {
     return best;
   }
 
-
   void make_leaf(uint32_t node, const BuildRef* refs, size_t b, size_t e, const Box4& bounds) {
     for (size_t i = b; i < e; ++i) out_.prim_ids[i] = refs[i].prim();
     set_leaf(nodes_[node], bounds.aabb(), static_cast<uint32_t>(b), static_cast<uint32_t>(e - b));

@@ -4,9 +4,6 @@
 // along each axis, and every bin boundary is a split candidate. Large ranges
 // bin in parallel (TBB reduction of per-chunk bin sets).
 #include <immintrin.h>
-#if defined(__SSE4_1__)
-#include <smmintrin.h>
-#endif
 
 #include <cstring>
 #include <limits>
@@ -35,7 +32,8 @@ struct BinBoxes {
   // (+0 and -0) both return the second operand, and negation is exact.
   __m256 bound[3][kBins];
 
-  static __m256 pack(const Box4& box) {
+  using Packed = __m256;  // a box in the bins' form: packed once, grown into three bins
+  static Packed pack(const Box4& box) {
     const __m128 sign = _mm_set1_ps(-0.0f);
     return _mm256_insertf128_ps(_mm256_castps128_ps256(box.lo), _mm_xor_ps(box.hi, sign), 1);
   }
@@ -44,7 +42,7 @@ struct BinBoxes {
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < bins; ++b) bound[a][b] = empty;
   }
-  void grow_packed(int axis, int bin, __m256 packed) { bound[axis][bin] = _mm256_min_ps(bound[axis][bin], packed); }
+  void grow_packed(int axis, int bin, Packed packed) { bound[axis][bin] = _mm256_min_ps(bound[axis][bin], packed); }
   void grow(int axis, int bin, const Box4& box) { grow_packed(axis, bin, pack(box)); }
   Box4 box(int axis, int bin) const {
     Box4 r;
@@ -59,6 +57,10 @@ struct BinBoxes {
 #else
   __m128 lo[3][kBins];
   __m128 hi[3][kBins];
+
+  using Packed = Box4;
+  static const Box4& pack(const Box4& box) { return box; }
+  void grow_packed(int axis, int bin, const Box4& box) { grow(axis, bin, box); }
 
   void reset(int bins) {
     const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
@@ -95,13 +97,17 @@ struct BinSet : BinBoxes<kMaxBins> {
 
   static std::unique_ptr<BinSet> make(int bins) {
     std::unique_ptr<BinSet> s(new BinSet);
-    s->reset(bins);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < bins; ++b) s->count[a][b] = 0;
+    s->clear(bins);
     return s;
   }
-  void add(int axis, int bin, const Box4& b) {
-    grow(axis, bin, b);
+  // Empty boxes and zero counts in the first `bins` bins of each axis.
+  void clear(int bins) {
+    reset(bins);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) count[a][b] = 0;
+  }
+  void add_packed(int axis, int bin, const Packed& packed) {
+    grow_packed(axis, bin, packed);
     count[axis][bin]++;
   }
   void merge_from(const BinSet& o, int bins) {
@@ -168,15 +174,8 @@ struct Split {
 inline void bin_one(const BuildRef& r, const Binning& bn, BinSet& bins) {
   alignas(16) int32_t idx[4];
   _mm_store_si128(reinterpret_cast<__m128i*>(idx), bn.bins_of(r));
-#if defined(__AVX__)
-  const __m256 packed = BinSet::pack(r.box);
-  for (int a = 0; a < 3; ++a) {
-    bins.grow_packed(a, idx[a], packed);
-    bins.count[a][idx[a]]++;
-  }
-#else
-  for (int a = 0; a < 3; ++a) bins.add(a, idx[a], r.box);
-#endif
+  const BinSet::Packed packed = BinSet::pack(r.box);  // once for the three axes
+  for (int a = 0; a < 3; ++a) bins.add_packed(a, idx[a], packed);
 }
 
 // Bins refs[b, e) into `bins` (which must be initialised for nbins). Long
@@ -190,9 +189,7 @@ inline void bin_range(const BuildRef* refs, size_t b, size_t e, const Binning& b
   thread_local std::unique_ptr<BinSet> second;
   if (!second) second.reset(new BinSet);
   BinSet& other = *second;
-  other.reset(nbins);
-  for (int a = 0; a < 3; ++a)
-    for (int k = 0; k < nbins; ++k) other.count[a][k] = 0;
+  other.clear(nbins);
   size_t i = b;
   for (; i + 1 < e; i += 2) {
     bin_one(refs[i], bn, bins);
