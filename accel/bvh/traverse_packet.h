@@ -250,9 +250,15 @@ inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr
     pr.axes[kz][0] = kx, pr.axes[kz][1] = ky, pr.axes[kz][2] = kz;
     const uint32_t lanes = pr.lanes_of_kz[kz];
     if (lanes == 0) continue;
-    const V dz = V::load(in.dir[kz]);
+    // 1 / dz is the slab test's reciprocal (correctly rounded either way).
+    const V inv_dz = pr.inv[kz];
+    if (lanes == 0xFFFFu) {  // the common case: one dominant axis for the packet
+      (V::load(in.dir[kx]) * inv_dz).store(pr.sx);
+      (V::load(in.dir[ky]) * inv_dz).store(pr.sy);
+      inv_dz.store(pr.sz);
+      continue;
+    }
     alignas(64) float sx[kPacketSize], sy[kPacketSize], sz[kPacketSize];
-    const V inv_dz = one / dz;
     (V::load(in.dir[kx]) * inv_dz).store(sx);
     (V::load(in.dir[ky]) * inv_dz).store(sy);
     inv_dz.store(sz);
@@ -388,15 +394,16 @@ class PacketTracer {
         const uint32_t active = rays_entering(parent, slot, pr, V::load(ph.t));
         if (active == 0) continue;
         const uint32_t child = parent.child[slot];
+        // The packet's far bound shrinks only when some ray finds a hit.
         if (wide_ref::is_leaf(child)) {
-          intersect_leaf(child, pr, active, ph);
+          if (intersect_leaf(child, pr, active, ph)) tmax_hi = ph.greatest_t();
         } else if (simd::popcount(active) <= kSingleRayBelow) {
           for (uint32_t m = active; m != 0; m &= m - 1) finish_single(rays, simd::ctz(m), child, ph);
+          tmax_hi = ph.greatest_t();
         } else {
           node_index = child;
           break;
         }
-        tmax_hi = ph.greatest_t();
       }
     }
   }
@@ -422,13 +429,13 @@ class PacketTracer {
   }
 
   // A leaf against the rays that enter it: half-width vectors when they are
-  // all in one half of the packet.
-  void intersect_leaf(uint32_t leaf, const PacketRays& pr, uint32_t active, PacketHits& ph) const {
+  // all in one half of the packet. True when some ray's closest hit changed.
+  bool intersect_leaf(uint32_t leaf, const PacketRays& pr, uint32_t active, PacketHits& ph) const {
     const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
     const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
-    if ((active >> 8) == 0) intersect_lanes<8>(blocks, nblocks, pr, 0, active, ph);
-    else if ((active & 0xFFu) == 0) intersect_lanes<8>(blocks, nblocks, pr, 8, active >> 8, ph);
-    else intersect_lanes<16>(blocks, nblocks, pr, 0, active, ph);
+    if ((active >> 8) == 0) return intersect_lanes<8>(blocks, nblocks, pr, 0, active, ph);
+    if ((active & 0xFFu) == 0) return intersect_lanes<8>(blocks, nblocks, pr, 8, active >> 8, ph);
+    return intersect_lanes<16>(blocks, nblocks, pr, 0, active, ph);
   }
 
   // The watertight test of intersect_block with rays in the lanes instead of
@@ -441,19 +448,21 @@ class PacketTracer {
   // early rejection of hits behind the origin only saves work: those lanes
   // fail t >= tmin here.) Hits are kept by the recorder's rule (HitRecorder).
   template <int L>
-  static void intersect_lanes(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
+  static bool intersect_lanes(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& r, int first,
                               uint32_t active, PacketHits& ph) {
     HitLanes<L> h(ph, first);
+    bool hit = false;
     for (int kz = 0; kz < 3; ++kz) {
       const uint32_t lanes = active & (r.lanes_of_kz[kz] >> first);
       if (lanes == 0) continue;
-      for (uint32_t b = 0; b < nblocks; ++b) intersect_block_packet<L>(blocks[b], r, r.axes[kz], first, lanes, h);
+      for (uint32_t b = 0; b < nblocks; ++b) hit |= intersect_block_packet<L>(blocks[b], r, r.axes[kz], first, lanes, h);
     }
-    h.store(ph, first);
+    if (hit) h.store(ph, first);
+    return hit;
   }
 
   template <int L>
-  static void intersect_block_packet(const TriangleBlock<W>& blk, const PacketRays& r, const int* axis, int first,
+  static bool intersect_block_packet(const TriangleBlock<W>& blk, const PacketRays& r, const int* axis, int first,
                                      uint32_t active, HitLanes<L>& h) {
     using VL = simd::vfloat<L>;
     using VW = simd::vfloat<W>;
@@ -467,6 +476,7 @@ class PacketTracer {
     const VL sz = VL::load(r.sz + first);
     const VL tmin = VL::load(r.tmin_lane + first);
     const int count = blk.count();  // padding lanes repeat the first triangle
+    bool hit = false;
     for (int j = 0; j < count; ++j) {
       const VL az0 = VL::broadcast(rel[0][2][j]);
       const VL bz0 = VL::broadcast(rel[1][2][j]);
@@ -484,8 +494,9 @@ class PacketTracer {
       const VL inv_det = VL::broadcast(1.0f) / det;
       const VL t = tt * inv_det;
       mask &= cmp_ge(t, tmin) & cmp_le(t, h.t);
-      if (mask != 0) h.record(mask, t, v * inv_det, w * inv_det, blk.prim[j]);
+      if (mask != 0) h.record(mask, t, v * inv_det, w * inv_det, blk.prim[j]), hit = true;
     }
+    return hit;
   }
 
   WideView<N, W> bvh_;
