@@ -8,7 +8,9 @@
 // SIGGRAPH 2005, for the frustum idea), so an inner node costs about what it
 // costs one ray. At a leaf every ray takes its own box test of the leaf (the
 // single-ray test, lane by lane), and the rays that pass test the leaf's
-// triangles one triangle at a time, 16 rays per vector.
+// triangles one triangle at a time, 16 rays per vector; when only a few rays
+// pass, each tests the leaf's blocks as a single ray does, a triangle per
+// lane (fewer vector tests: one per block and ray instead of one per triangle).
 //
 // Only 16-ray chunks whose rays share one origin and one direction octant
 // form a packet (pinhole camera rays); everything else is traced by the
@@ -410,6 +412,10 @@ class PacketTracer {
 
   // Subtrees entered by at most this many rays are finished ray by ray.
   static constexpr int kSingleRayBelow = 2;
+  // Leaves entered by at most this many rays are tested ray by ray, a
+  // triangle per lane (intersect_leaf_per_ray): measured against 0, 2, 6 and
+  // 8 on the five interior views' camera rays (docs/bvh-speed.md, session 26).
+  static constexpr int kPerRayLeafAtMost = 4;
 
   // A child as the packet walk pushes it: (parent node, slot), with the leaf
   // bit of the child (so that leaves keep their place in the key order).
@@ -433,9 +439,52 @@ class PacketTracer {
   bool intersect_leaf(uint32_t leaf, const PacketRays& pr, uint32_t active, PacketHits& ph) const {
     const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
     const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
+    if (simd::popcount(active) <= kPerRayLeafAtMost) return intersect_leaf_per_ray(blocks, nblocks, pr, active, ph);
     if ((active >> 8) == 0) return intersect_lanes<8>(blocks, nblocks, pr, 0, active, ph);
     if ((active & 0xFFu) == 0) return intersect_lanes<8>(blocks, nblocks, pr, 8, active >> 8, ph);
     return intersect_lanes<16>(blocks, nblocks, pr, 0, active, ph);
+  }
+
+  // A lane's closest hit as a recorder for the single-ray block functions
+  // (HitRecorder's rule; the lane starts at the ray's tmax or its hit so far).
+  struct LaneRecorder {
+    static constexpr bool kStopAtFirstHit = false;
+    PacketHits& ph;
+    uint32_t i;
+    float tmax() const { return ph.t[i]; }
+    void count_triangles(uint64_t) const {}
+    bool record(float t, float u, float v, uint32_t prim) {
+      if (t < ph.t[i] || (t == ph.t[i] && prim < ph.prim[i])) {
+        ph.t[i] = t, ph.u[i] = u, ph.v[i] = v, ph.prim[i] = prim;
+        return true;
+      }
+      return false;
+    }
+  };
+
+  // A leaf entered by few rays: each ray takes the single-ray block test (a
+  // triangle per lane), one vector test per block and ray instead of one per
+  // triangle. Its values per ray and triangle are the lane-per-ray test's.
+  static bool intersect_leaf_per_ray(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& pr,
+                                     uint32_t active, PacketHits& ph) {
+    using VW = simd::vfloat<W>;
+    bool hit = false;
+    for (uint32_t m = active; m != 0; m &= m - 1) {
+      const uint32_t i = simd::ctz(m);
+      const int kz = (pr.lanes_of_kz[0] >> i) & 1u ? 0 : (pr.lanes_of_kz[1] >> i) & 1u ? 1 : 2;
+      const int* axis = pr.axes[kz];
+      BlockRay<W> br;
+      br.ox = VW::broadcast(pr.org[axis[0]]);
+      br.oy = VW::broadcast(pr.org[axis[1]]);
+      br.oz = VW::broadcast(pr.org[axis[2]]);
+      br.nsx = VW::broadcast(-pr.sx[i]);
+      br.nsy = VW::broadcast(-pr.sy[i]);
+      br.sz = VW::broadcast(pr.sz[i]);
+      br.off_x = axis[0] * W, br.off_y = axis[1] * W, br.off_z = axis[2] * W;
+      LaneRecorder rec{ph, i};
+      hit |= intersect_block_leaf(blocks, nblocks, br, pr.tmin_lane[i], rec);
+    }
+    return hit;
   }
 
   // The watertight test of intersect_block with rays in the lanes instead of
