@@ -353,7 +353,7 @@ class PacketTracer {
   // the whole packet by the frustum test, and pushed as (parent, slot). When
   // one is taken, every ray first runs its own test of the child's box
   // (rays_entering): a child no ray enters is skipped, a leaf is tested by the
-  // rays that enter it, and a subtree entered by few rays is finished ray by
+  // rays that enter it, and a subtree entered by one ray is finished ray by
   // ray by the single-ray walk (Benthin et al. 2012), which continues from
   // the ray's closest hit so far.
   void walk(std::span<const Ray> rays, const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
@@ -399,7 +399,7 @@ class PacketTracer {
         // The packet's far bound shrinks only when some ray finds a hit.
         if (wide_ref::is_leaf(child)) {
           if (intersect_leaf(child, pr, active, ph)) tmax_hi = ph.greatest_t();
-        } else if (simd::popcount(active) <= kSingleRayBelow) {
+        } else if (simd::popcount(active) <= kSingleRayAtMost) {
           for (uint32_t m = active; m != 0; m &= m - 1) finish_single(rays, simd::ctz(m), child, ph);
           tmax_hi = ph.greatest_t();
         } else {
@@ -410,8 +410,10 @@ class PacketTracer {
     }
   }
 
-  // Subtrees entered by at most this many rays are finished ray by ray.
-  static constexpr int kSingleRayBelow = 2;
+  // Subtrees entered by at most this many rays are finished ray by ray (1
+  // measured 2-3 % faster than 2, and than 0, since leaves entered by few
+  // rays are tested ray by ray: docs/bvh-speed.md, session 26).
+  static constexpr int kSingleRayAtMost = 1;
   // Leaves entered by at most this many rays are tested ray by ray, a
   // triangle per lane (intersect_leaf_per_ray): measured against 0, 2, 6 and
   // 8 on the five interior views' camera rays (docs/bvh-speed.md, session 26).
