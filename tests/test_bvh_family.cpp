@@ -248,7 +248,7 @@ TEST(BvhFamily, RejectsBadParameters) {
                            "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
                            "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
                            "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
-                           "bvh:layout=bvh16,packet=16", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
+                           "bvh:layout=bvh16,packet=16,block=4", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
                            "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0", "bvh:owalk=1,block=4"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
@@ -1514,6 +1514,8 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
     rays.insert(rays.begin(), fan.begin(), fan.end());
     const std::pair<const char*, const char*> pairs[] = {
         {"bvh", "bvh:packet=16"},
+        {"bvh:layout=bvh8", "bvh:packet=16,layout=bvh8"},
+        {"bvh:layout=bvh16", "bvh:packet=16,layout=bvh16"},
         {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},
         {"bvh:block=16", "bvh:packet=16,block=16"}};
     for (const auto& [single_spec, spec] : pairs) {
@@ -1548,9 +1550,10 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   }
 }
 
-TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
+template <int N>
+void check_packet_frustum() {
   // Random 16-ray packets (one origin, directions spread over a cone, some
-  // rays short) against random 8-box nodes: the frustum test keeps every box
+  // rays short) against random N-box nodes (N = 8, 16): the frustum test keeps every box
   // some ray's own single-ray test enters, with an entry distance no larger
   // than that ray's; and the per-lane leaf test is each ray's own test, bit
   // for bit. The frustum must also cull: a test that keeps every box would
@@ -1572,11 +1575,11 @@ TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
     if (!in.coherent(FLT_MAX)) continue;
     ++packets;
     PacketRays pr;
-    PacketFrustum fr;
+    PacketFrustum<N> fr;
     PacketHits ph;
     make_packet(in, pr, fr, ph);
-    WideNode<8> node{};
-    for (int c = 0; c < 8; ++c) {
+    WideNode<N> node{};
+    for (int c = 0; c < N; ++c) {
       // Boxes near the packet's path (so that rays hit some), corner a.
       const Vec3f a = org + uniform(-0.5f, 5.0f) * base + Vec3f(uniform(-1, 0.5f), uniform(-1, 0.5f), uniform(-1, 0.5f));
       Vec3f e(uniform(0, 1.5f), uniform(0, 1.5f), uniform(0, 1.5f));
@@ -1584,24 +1587,24 @@ TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
       for (int ax = 0; ax < 3; ++ax) node.bounds[2 * ax][c] = a[ax], node.bounds[2 * ax + 1][c] = a[ax] + e[ax];
       node.child[c] = c;
     }
-    using V8 = simd::vfloat<8>;
-    V8 ftnear;
-    const uint32_t fmask = frustum_children(node, fr, V8::broadcast(ph.greatest_t()), ftnear);
-    alignas(32) float fnear[8];
+    using VN = simd::vfloat<N>;
+    VN ftnear;
+    const uint32_t fmask = frustum_children(node, fr, VN::broadcast(ph.greatest_t()), ftnear);
+    alignas(64) float fnear[N];
     ftnear.store(fnear);
-    frustum_culled += 8 - simd::popcount(fmask);
-    uint32_t lanes_of_slot[8] = {};
-    for (int c = 0; c < 8; ++c) lanes_of_slot[c] = rays_entering(node, c, pr, simd::vfloat<kPacketSize>::load(ph.t));
+    frustum_culled += N - simd::popcount(fmask);
+    uint32_t lanes_of_slot[N] = {};
+    for (int c = 0; c < N; ++c) lanes_of_slot[c] = rays_entering(node, c, pr, simd::vfloat<kPacketSize>::load(ph.t));
     for (int i = 0; i < kPacketSize; ++i) {
-      WideNodeRay<8> nr;
+      WideNodeRay<N> nr;
       init_node_ray(nr, rays[i], false);
-      V8 tnear;
-      const uint32_t m = intersect_children<8, false>(node, nr, V8::broadcast(rays[i].tmin), V8::broadcast(rays[i].tmax), tnear);
-      alignas(32) float near[8];
+      VN tnear;
+      const uint32_t m = intersect_children<N, false>(node, nr, VN::broadcast(rays[i].tmin), VN::broadcast(rays[i].tmax), tnear);
+      alignas(64) float near[N];
       tnear.store(near);
       kept_by_rays += simd::popcount(m);
       EXPECT_EQ(m & ~fmask, 0u) << "trial " << trial << " ray " << i;
-      for (int c = 0; c < 8; ++c) {
+      for (int c = 0; c < N; ++c) {
         if ((m >> c) & 1u) {
           EXPECT_LE(fnear[c], near[c]) << "trial " << trial << " ray " << i << " slot " << c;
         }
@@ -1614,9 +1617,15 @@ TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
   EXPECT_GT(frustum_culled, 2 * packets);  // and culled
 }
 
+TEST(BvhPacket, FrustumCullsOnlyWhatEveryRayCulls) {
+  check_packet_frustum<8>();   // layout=bvh8
+  check_packet_frustum<16>();  // layout=bvh16
+}
+
 TEST(BvhPacket, RejectsBadParameters) {
   EXPECT_THROW(make_accelerator("bvh:packet=8"), SpecError);
   EXPECT_THROW(make_accelerator("bvh:packet=16,layout=bvh4"), SpecError);
+  EXPECT_NO_THROW(make_accelerator("bvh:packet=16,layout=bvh16"));
 }
 
 TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {

@@ -3,7 +3,7 @@
 // into:
 //
 //   builder=binned|sweep|sbvh|lbvh   opt=none|light|reinsert   layout=bvh2|bvh4|bvh8|bvh16
-//   packet=0|16 (bvh8: closest-hit batches traced as 16-ray frustum packets)
+//   packet=0|16 (bvh8, bvh16: closest-hit batches traced as 16-ray frustum packets)
 //   simd=1|0 (0: the wide layouts walked with scalar tests, same hits and counts)
 //   node=f32|q8 (bvh8: float child boxes, or 8-bit planes on a per-node grid, quantized_node.h)
 //
@@ -68,7 +68,7 @@ struct BvhConfig {
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
-  int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 only
+  int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 or bvh16
   bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
   bool occlusion_order = false;  // aorder=rtsah: child slots ordered for any-hit walks (occlusion_order.h)
@@ -130,6 +130,8 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
   // 8-triangle blocks only: sixteen walks more per kernel (they made this file's
   // compilation 50 % longer for all seven float-node kernels).
   static constexpr bool kOctantWalks = !kScalar && kFloatNodes && W == 8;
+  // Node widths the packet walk takes (traverse_packet.h).
+  static constexpr bool kPacketWidth = (N == 8 || N == 16) && !kScalar && kFloatNodes;
   static_assert(kFloatNodes || !kScalar, "simd=0 walks float nodes");
 
  public:
@@ -138,17 +140,22 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
     view_ = WideView<N, W, Node>{bvh_.nodes.data(), bvh_.blocks.data(), bvh_.root_ref,
                                  wide_fma_origin_limit(bvh_.root_box)};
     // The packet walk pushes leaves as (parent node, slot) in a child reference.
-    if (packets_ && bvh_.nodes.size() > (wide_ref::kLeafBit >> 3))
-      throw std::runtime_error("bvh: too many nodes for packet=16");
+    if constexpr (kPacketWidth) {
+      if (packets_ && bvh_.nodes.size() > PacketTracer<N, W>::kMaxNodes)
+        throw std::runtime_error("bvh: too many nodes for packet=16");
+    }
   }
 
   // packet=16: uninstrumented closest-hit batches go through the packet
   // tracer (same answers); counted batches take the single-ray kernel, whose
   // counters mean what every structure's mean.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
-    if constexpr (N == 8 && !kScalar && kFloatNodes) {
+    if constexpr (kPacketWidth) {
       if (packets_ && !stats) {
-        PacketTracer<W>(view_).intersect(rays, hits);
+        // Rays that form no packet take this kernel's single-ray batch loop.
+        PacketTracer<N, W>(view_).intersect(rays, hits, [&](std::span<const Ray> r, std::span<Hit> h) {
+          trace_uncounted<false>(r, nullptr, [&](size_t i, const Hit& hit) { h[i] = hit; });
+        });
         return;
       }
     }
@@ -399,8 +406,8 @@ class BvhAccel final : public Accelerator {
       if (cfg_.layout == LayoutKind::Bvh4) kernel_ = make_wide_kernel<4, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else if (cfg_.layout == LayoutKind::Bvh16) kernel_ = make_wide_kernel<16, 8, true>(wide, mesh, false, cfg_.tri, bytes);
       else kernel_ = make_wide_kernel<8, 8, true>(wide, mesh, false, cfg_.tri, bytes);
-    } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8, single rays (checked by the spec parser)
-      kernel_ = make_wide_kernel<16, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
+    } else if (cfg_.layout == LayoutKind::Bvh16) {  // block=8 (checked by the spec parser)
+      kernel_ = make_wide_kernel<16, 8>(wide, mesh, packets, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
     } else if (cfg_.layout == LayoutKind::Bvh4) {
       if (block == 4) kernel_ = make_wide_kernel<4, 4>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
       else if (block == 8) kernel_ = make_wide_kernel<4, 8>(wide, mesh, false, cfg_.tri, bytes, cfg_.octant_walks, cfg_.ahead);
@@ -432,7 +439,7 @@ AcceleratorInfo bvh_accelerator_info() {
       {{"builder", "binned", "binary tree builder: binned (SAH), sweep (full-sweep SAH), sbvh (spatial splits), lbvh (Morton)",
         one_of({"binned", "sweep", "sbvh", "lbvh"})},
        {"layout", "auto", "traversal layout: bvh2, bvh4, bvh8, bvh16 (16-wide nodes, 448 bytes: one AVX-512 "
-        "instruction per plane; single rays, block=8, node=f32) or auto (bvh16 where the kernel is AVX-512 "
+        "instruction per plane; block=8, node=f32) or auto (bvh16 where the kernel is AVX-512 "
         "and the spec allows it, else bvh8)",
         one_of({"auto", "bvh2", "bvh4", "bvh8", "bvh16"})},
        {"opt", "light", "post-build optimisation: none, light (four reinsertion rounds over the worst 0.5 % of the nodes, "
@@ -465,7 +472,7 @@ AcceleratorInfo bvh_accelerator_info() {
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
        triangle_test_param("; mt: not with simd=0 or packet=16"),
-       {"packet", "0", "bvh8: 0 (single rays) or 16 (closest-hit batches: 16 rays from one origin as one frustum, other rays singly)",
+       {"packet", "0", "bvh8, bvh16: 0 (single rays) or 16 (closest-hit batches: 16 rays from one origin as one frustum, other rays singly)",
         integer_of({0, kPacketSize})},
        {"bound", "box", "node bounds: box, or sphere (Ritter spheres on the bvh2 tree; layout=bvh2 implied)",
         one_of({"box", "sphere"})},
@@ -546,13 +553,14 @@ AcceleratorInfo bvh_accelerator_info() {
         // (docs/bvh-speed.md, session 15). Elsewhere a 16-wide plane takes
         // two or four instructions, and bvh8 stays the layout.
         if (l == "auto")
-          c.layout = simd::isa_bits() >= 512 && c.packet == 0 && !c.quantized && c.block == 8
+          c.layout = simd::isa_bits() >= 512 && !c.quantized && c.block == 8
                          ? LayoutKind::Bvh16
                          : LayoutKind::Bvh8;
         if (!c.simd && c.packet != 0) throw SpecError("bvh: packet=16 needs simd=1");
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
-        if (c.packet != 0 && c.layout != LayoutKind::Bvh8) throw SpecError("bvh: packet=16 needs layout=bvh8");
+        if (c.packet != 0 && c.layout != LayoutKind::Bvh8 && c.layout != LayoutKind::Bvh16)
+          throw SpecError("bvh: packet=16 needs layout=bvh8 or bvh16");
         // The binary walk orders both children by entry distance, any hit too: no slot order to set.
         if (c.occlusion_order && c.layout == LayoutKind::Bvh2)
           throw SpecError("bvh: aorder=rtsah needs a wide layout (bvh4, bvh8, bvh16)");

@@ -132,9 +132,11 @@ struct PacketRays {
 // fl(min(x * inv_lo, x * inv_hi) + least shift): x * inv is monotonic in inv
 // and rounding is monotonic; the test computes that bound exactly as the min
 // of two FMAs. The far side is the mirror image. So a box the frustum test
-// culls is culled by every ray's own test.
+// culls is culled by every ray's own test. N: the node width (8 or 16), one
+// child per lane.
+template <int N = 8>
 struct PacketFrustum {
-  using V = simd::vfloat<8>;
+  using V = simd::vfloat<N>;
   V inv_lo[3], inv_hi[3], near_shift[3], far_shift[3];
   V tmin;  // least tmin of the packet (>= +0)
   int near_off[3], far_off[3];  // float offsets of the near / far plane rows in a node
@@ -201,10 +203,10 @@ struct HitLanes {
 };
 
 // The lanes' constants and the frustum, from 16 coherent rays.
-inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr, PacketHits& ph) {
+template <int N>
+inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum<N>& fr, PacketHits& ph) {
   using V = simd::vfloat<kPacketSize>;
-  using V8 = simd::vfloat<8>;
-  constexpr int N = 8;
+  using VN = simd::vfloat<N>;
   const V zero = V::broadcast(0.0f), one = V::broadcast(1.0f);
   // -0 as +0, as the single-ray kernel (tmin >= 0 here).
   const V tmin = max(V::load(in.tmin), zero);
@@ -230,14 +232,14 @@ inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr
     pr.near_shift[a] = max(oi + delta, V::broadcast(-FLT_MAX)) * V::broadcast(-1.0f);
     pr.far_shift[a] = min(oi - delta, V::broadcast(FLT_MAX)) * V::broadcast(-1.0f);
     // The frustum: extremes over the lanes.
-    fr.inv_lo[a] = V8::broadcast(lanes_min(pr.inv[a]));
-    fr.inv_hi[a] = V8::broadcast(lanes_max(pr.inv[a]));
-    fr.near_shift[a] = V8::broadcast(lanes_min(pr.near_shift[a]));
-    fr.far_shift[a] = V8::broadcast(lanes_max(pr.far_shift[a]));
+    fr.inv_lo[a] = VN::broadcast(lanes_min(pr.inv[a]));
+    fr.inv_hi[a] = VN::broadcast(lanes_max(pr.inv[a]));
+    fr.near_shift[a] = VN::broadcast(lanes_min(pr.near_shift[a]));
+    fr.far_shift[a] = VN::broadcast(lanes_max(pr.far_shift[a]));
     fr.near_off[a] = pr.near_row[a] * N;
     fr.far_off[a] = pr.far_row[a] * N;
   }
-  fr.tmin = V8::broadcast(lanes_min(tmin));
+  fr.tmin = VN::broadcast(lanes_min(tmin));
   // The watertight shear, as WatertightRay, for each dominant axis present.
   const V sign = V::broadcast(-0.0f);
   const V ax = andnot(sign, V::load(in.dir[0])), ay = andnot(sign, V::load(in.dir[1])),
@@ -271,17 +273,18 @@ inline void make_packet(const PacketInput& in, PacketRays& pr, PacketFrustum& fr
   }
 }
 
-// The 8 child boxes against the frustum: the mask of children some ray may
+// The N child boxes against the frustum: the mask of children some ray may
 // enter before tmax_hi (the packet's greatest closest hit so far), and
 // lower bounds of the rays' entry distances (for the visiting order).
-inline uint32_t frustum_children(const WideNode<8>& node, const PacketFrustum& f, simd::vfloat<8> tmax_hi,
-                                 simd::vfloat<8>& tnear) {
-  using V8 = simd::vfloat<8>;
+template <int N>
+inline uint32_t frustum_children(const WideNode<N>& node, const PacketFrustum<N>& f, simd::vfloat<N> tmax_hi,
+                                 simd::vfloat<N>& tnear) {
+  using VN = simd::vfloat<N>;
   const float* b = &node.bounds[0][0];
-  V8 lo[3], hi[3];
+  VN lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    const V8 pn = V8::load(b + f.near_off[a]);
-    const V8 pf = V8::load(b + f.far_off[a]);
+    const VN pn = VN::load(b + f.near_off[a]);
+    const VN pf = VN::load(b + f.far_off[a]);
     lo[a] = min(fmadd(pn, f.inv_lo[a], f.near_shift[a]), fmadd(pn, f.inv_hi[a], f.near_shift[a]));
     hi[a] = max(fmadd(pf, f.inv_lo[a], f.far_shift[a]), fmadd(pf, f.inv_hi[a], f.far_shift[a]));
   }
@@ -294,7 +297,8 @@ inline uint32_t frustum_children(const WideNode<8>& node, const PacketFrustum& f
 
 // The rays whose own box test (the single-ray FMA slab test, lane by lane)
 // enters child `slot` of `node` before their closest hit.
-inline uint32_t rays_entering(const WideNode<8>& node, uint32_t slot, const PacketRays& pr,
+template <int N>
+inline uint32_t rays_entering(const WideNode<N>& node, uint32_t slot, const PacketRays& pr,
                               simd::vfloat<kPacketSize> tmax) {
   using V = simd::vfloat<kPacketSize>;
   V near[3], far[3];
@@ -306,17 +310,24 @@ inline uint32_t rays_entering(const WideNode<8>& node, uint32_t slot, const Pack
   return padded_slab_mask(tnear, min_bits(min_bits(far[0], far[1]), min_bits(far[2], tmax)));
 }
 
-template <int W>
+// N: node width, 8 or 16 (a frustum test of all children in one vector of
+// N lanes); W: triangles per block.
+template <int N, int W>
 class PacketTracer {
  public:
+  static_assert(N == 8 || N == 16);
   using V = simd::vfloat<kPacketSize>;
-  using V8 = simd::vfloat<8>;
-  static constexpr int N = 8;
+  using VN = simd::vfloat<N>;
 
   explicit PacketTracer(const WideView<N, W>& bvh) : bvh_(bvh) {}
 
-  // Closest hits of rays (any count), 16 at a time in the order given.
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+  // Closest hits of rays (any count), 16 at a time in the order given; the
+  // runs of rays that form no packet go to single(rays, hits), the kernel's
+  // own single-ray batch loop (the same answers as trace_single, with the
+  // set-up it does for whole batches).
+  template <typename Single>
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Single&& single) const {
+    size_t run = 0;  // first ray of the current run of rays traced singly
     for (size_t b = 0; b < rays.size(); b += kPacketSize) {
       const size_t n = std::min<size_t>(kPacketSize, rays.size() - b);
       // First and last ray from one point (cheap, and false for most
@@ -324,24 +335,36 @@ class PacketTracer {
       if (n == kPacketSize && !wide_ref::is_leaf(bvh_.root_ref) && rays[b].org == rays[b + n - 1].org) {
         const PacketInput in(rays.subspan(b, n));
         if (in.coherent(bvh_.fma_origin_limit)) {
+          if (run < b) single(rays.subspan(run, b - run), hits.subspan(run, b - run));
           trace_packet(in, rays.subspan(b, n), hits.subspan(b, n));
-          continue;
+          run = b + n;
         }
       }
-      for (size_t i = b; i < b + n; ++i) trace_single(rays[i], hits[i]);
     }
+    if (run < rays.size()) single(rays.subspan(run), hits.subspan(run));
+  }
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
+    intersect(rays, hits, [&](std::span<const Ray> r, std::span<Hit> h) {
+      for (size_t i = 0; i < r.size(); ++i) trace_single(r[i], h[i]);
+    });
   }
 
  private:
   // Children are pushed as (parent node, slot) (WideKernel checks that node
   // indices fit).
-  static constexpr int kSlotBits = 3;
+  static constexpr int kSlotBits = N == 16 ? 4 : 3;
+
+ public:
+  // The most nodes a tree may have for the packet walk's child references.
+  static constexpr size_t kMaxNodes = size_t{wide_ref::kLeafBit} >> kSlotBits;
+
+ private:
 
   void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
   void trace_packet(const PacketInput& in, std::span<const Ray> rays, std::span<Hit> hits) const {
     PacketRays pr;
-    PacketFrustum fr;
+    PacketFrustum<N> fr;
     PacketHits ph;
     make_packet(in, pr, fr, ph);
     walk(rays, pr, fr, ph);
@@ -353,10 +376,10 @@ class PacketTracer {
   // the whole packet by the frustum test, and pushed as (parent, slot). When
   // one is taken, every ray first runs its own test of the child's box
   // (rays_entering): a child no ray enters is skipped, a leaf is tested by the
-  // rays that enter it, and a subtree entered by one ray is finished ray by
-  // ray by the single-ray walk (Benthin et al. 2012), which continues from
-  // the ray's closest hit so far.
-  void walk(std::span<const Ray> rays, const PacketRays& pr, const PacketFrustum& fr, PacketHits& ph) const {
+  // rays that enter it, and a subtree entered by one ray is finished by that
+  // ray's single-ray walk (Benthin et al. 2012), which continues from its
+  // closest hit so far.
+  void walk(std::span<const Ray> rays, const PacketRays& pr, const PacketFrustum<N>& fr, PacketHits& ph) const {
     float tmax_hi = ph.greatest_t();
     alignas(64) uint64_t stack[kWideStackSize];
     uint64_t* top = stack;
@@ -365,12 +388,12 @@ class PacketTracer {
       // The packet visits an inner node: the children the frustum keeps go
       // on the stack (the nearest, if several, straight to `next`).
       const WideNode<N>& node = bvh_.nodes[node_index];
-      V8 tnear;
-      const uint32_t mask = frustum_children(node, fr, V8::broadcast(tmax_hi), tnear);
+      VN tnear;
+      const uint32_t mask = frustum_children(node, fr, VN::broadcast(tmax_hi), tnear);
       uint32_t next = 0;
       bool have_next = false;
       if (mask != 0) {
-        alignas(32) uint32_t refs[N];
+        alignas(64) uint32_t refs[N];
         for (uint32_t c = 0; c < N; ++c) refs[c] = child_visit_ref(node_index, c, node.child[c]);
         const auto prefetch = [&](uint32_t i) __attribute__((always_inline)) { prefetch_child(bvh_, node.child[i]); };
         if ((mask & (mask - 1)) == 0) {
@@ -437,7 +460,7 @@ class PacketTracer {
   }
 
   // A leaf against the rays that enter it: half-width vectors when they are
-  // all in one half of the packet. True when some ray's closest hit changed.
+  // all in one half of the packet. False when no ray's closest hit changed.
   bool intersect_leaf(uint32_t leaf, const PacketRays& pr, uint32_t active, PacketHits& ph) const {
     const TriangleBlock<W>* blocks = bvh_.blocks + wide_ref::leaf_first(leaf);
     const uint32_t nblocks = wide_ref::leaf_blocks(leaf);
