@@ -323,8 +323,7 @@ class PacketTracer {
 
   // Closest hits of rays (any count), 16 at a time in the order given; the
   // runs of rays that form no packet go to single(rays, hits), the kernel's
-  // own single-ray batch loop (the same answers as trace_single, with the
-  // set-up it does for whole batches).
+  // own single-ray batch loop.
   template <typename Single>
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Single&& single) const {
     size_t run = 0;  // first ray of the current run of rays traced singly
@@ -343,11 +342,6 @@ class PacketTracer {
     }
     if (run < rays.size()) single(rays.subspan(run), hits.subspan(run));
   }
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
-    intersect(rays, hits, [&](std::span<const Ray> r, std::span<Hit> h) {
-      for (size_t i = 0; i < r.size(); ++i) trace_single(r[i], h[i]);
-    });
-  }
 
  private:
   // Children are pushed as (parent node, slot) (WideKernel checks that node
@@ -355,12 +349,10 @@ class PacketTracer {
   static constexpr int kSlotBits = N == 16 ? 4 : 3;
 
  public:
-  // The most nodes a tree may have for the packet walk's child references.
+  // The most nodes a tree may have for those child references.
   static constexpr size_t kMaxNodes = size_t{wide_ref::kLeafBit} >> kSlotBits;
 
  private:
-
-  void trace_single(const Ray& r, Hit& h) const { h = traverse_wide<N, W, false, false>(bvh_, r, nullptr); }
 
   void trace_packet(const PacketInput& in, std::span<const Ray> rays, std::span<Hit> hits) const {
     PacketRays pr;
@@ -492,20 +484,17 @@ class PacketTracer {
   // triangle. Its values per ray and triangle are the lane-per-ray test's.
   static bool intersect_leaf_per_ray(const TriangleBlock<W>* blocks, uint32_t nblocks, const PacketRays& pr,
                                      uint32_t active, PacketHits& ph) {
-    using VW = simd::vfloat<W>;
     bool hit = false;
     for (uint32_t m = active; m != 0; m &= m - 1) {
       const uint32_t i = simd::ctz(m);
+      // The lane's WatertightRay, from the values make_packet computed for it.
       const int kz = (pr.lanes_of_kz[0] >> i) & 1u ? 0 : (pr.lanes_of_kz[1] >> i) & 1u ? 1 : 2;
-      const int* axis = pr.axes[kz];
+      WatertightRay w;
+      w.org = Vec3f(pr.org[0], pr.org[1], pr.org[2]);
+      w.kx = pr.axes[kz][0], w.ky = pr.axes[kz][1], w.kz = kz;
+      w.sx = pr.sx[i], w.sy = pr.sy[i], w.sz = pr.sz[i];
       BlockRay<W> br;
-      br.ox = VW::broadcast(pr.org[axis[0]]);
-      br.oy = VW::broadcast(pr.org[axis[1]]);
-      br.oz = VW::broadcast(pr.org[axis[2]]);
-      br.nsx = VW::broadcast(-pr.sx[i]);
-      br.nsy = VW::broadcast(-pr.sy[i]);
-      br.sz = VW::broadcast(pr.sz[i]);
-      br.off_x = axis[0] * W, br.off_y = axis[1] * W, br.off_z = axis[2] * W;
+      br.init(w);
       LaneRecorder rec{ph, i};
       hit |= intersect_block_leaf(blocks, nblocks, br, pr.tmin_lane[i], rec);
     }
