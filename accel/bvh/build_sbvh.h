@@ -54,7 +54,18 @@ struct SbvhOptions {
   // references: they pay off where large triangles straddle big nodes, and
   // trying them at every small node dominates build time.
   size_t min_spatial_refs = 0;
+  // Whether spatial splits may cut axis-planar references (boxes thinner
+  // than kAxisPlanarFraction of their largest extent along some axis: floors,
+  // walls, ceilings of architectural scenes). Cut, their pieces spread over
+  // many subtrees whose boxes then reach down to the surface, and rays that
+  // start on it (shadow and bounce rays) enter all of them; kept whole, they
+  // go to the side of their centroid (docs/bvh-speed.md, session 27).
+  bool split_planar = true;
 };
+
+// Fraction of a reference's largest box extent under which its smallest one
+// makes it axis-planar (SbvhOptions::split_planar).
+inline constexpr float kAxisPlanarFraction = 1.0f / 1024.0f;
 
 struct SbvhStats {
   size_t references = 0;      // references in the final tree (>= primitives)

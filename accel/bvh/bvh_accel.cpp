@@ -61,6 +61,7 @@ struct BvhConfig {
   float split_budget = 0.5f;  // SBVH extra references / triangles
   int spatial_min = 0;        // SBVH: minimum references for spatial split attempts
   int spatial_bins = 32;      // SBVH: slabs per axis
+  bool split_planar = true;   // SBVH: spatial splits may cut axis-planar triangles (sflat=1)
   float presplit = 0.0f;      // binned: pre-split budget, extra references / triangles (presplit.h)
   int opt_rounds = 4;         // reinsertion rounds (work, not time; auto: light 4, reinsert 32)
   double opt_batch = 0.005;   // reinsertion: nodes considered per round, a fraction of all nodes (auto: light 0.005, reinsert 0.15)
@@ -346,6 +347,7 @@ class BvhAccel final : public Accelerator {
         so.split_budget = cfg_.split_budget;
         so.min_spatial_refs = static_cast<size_t>(cfg_.spatial_min);
         so.spatial_bins = cfg_.spatial_bins;
+        so.split_planar = cfg_.split_planar;
         SbvhStats ss;
         tree = build_sbvh(boxes, centroids, TriangleSplitter(mesh), so, &ss);
         s.extra["spatial_splits"] = static_cast<double>(ss.spatial_splits);
@@ -463,6 +465,9 @@ AcceleratorInfo bvh_accelerator_info() {
         "before the build (Karras & Aila 2013)",
         real_in(0, 4).as_float()},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)", integer_in(2, 256)},
+       {"sflat", "1", "sbvh: 1 (spatial splits may cut axis-planar triangles: floors, walls) or 0 (they stay whole: "
+        "fewer nodes for rays that start on such surfaces, such as shadow rays; a study option)",
+        integer_of({0, 1})},
        {"opt_rounds", "auto", "reinsertion: at most this many rounds (auto: light 4, reinsert 32; work-bounded: the tree "
         "does not depend on machine load)",
         integer_in(0, 1000).or_word("auto")},
@@ -534,6 +539,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.opt_batch = p.str("opt_batch") == "auto" ? (light ? 0.005 : 0.15) : p.real("opt_batch");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
+        c.split_planar = p.integer("sflat") == 1;
         c.presplit = static_cast<float>(p.real("presplit"));
         if (c.presplit > 0.0f && c.builder != BuilderKind::Binned)
           throw SpecError("bvh: presplit needs builder=binned");
