@@ -1,7 +1,8 @@
 // The benchmark workflow (workflow/): the per-cell reports merged by
 // merge_records.py equal one `raylab bench` run over the same matrix (same
 // cells in the same order, same hits, same CSV columns); compare_records.py
-// finds a changed hit; the Snakefile parses and plans the quick preset.
+// finds a changed hit; the Snakefile parses and plans the quick preset; and
+// scripts/random_views.py, the view-robustness helper.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -182,6 +183,47 @@ TEST(Workflow, SnakefilePlansTheScalarAndFullPresets) {
       EXPECT_THAT(r.output, HasSubstr("equal_time_renders 13 "));
       EXPECT_THAT(r.output, HasSubstr("--accel 'kdtree:simd=0,ct=15'"));
     }
+  }
+  fs::remove_all(dir);
+}
+
+// scripts/random_views.py: seeded cameras inside the box (the same seed, the
+// same files), mesh paths made absolute so the copies load from elsewhere,
+// and bad arguments refused without writing anything.
+TEST(Scripts, RandomViewsWritesSeededCamerasInsideTheBox) {
+  const auto dir = test::temp_dir("random_views");
+  fs::create_directories(dir / "src");
+  std::ofstream(dir / "src" / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(dir / "src" / "room.json")
+      << R"({"camera": {"from": [0, 0, 5], "at": [0, 0, 0], "up": [0, 1, 0], "fov_deg": 50, "width": 32, "height": 24},
+             "meshes": [{"file": "tri.obj"}, {"generator": "plane"}]})";
+  const std::string script = "/usr/bin/python3 " + kSource + "/scripts/random_views.py " + (dir / "src" / "room.json").string();
+  for (const char* out : {"a/view", "b/view"})
+    ASSERT_EQ(sh(script + " " + (dir / out).string() + " --box=-1,2,-3,1,4,3 --count 3 --seed 5").exit_code, 0);
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = "view_v" + std::to_string(i) + ".json";
+    const nlohmann::json a = read_json(dir / "a" / name), b = read_json(dir / "b" / name);
+    EXPECT_EQ(a, b) << "same seed, same views";
+    const auto& from = a["camera"]["from"];
+    ASSERT_EQ(from.size(), 3u);
+    EXPECT_GE(from[0].get<double>(), -1.0);
+    EXPECT_LE(from[0].get<double>(), 1.0);
+    EXPECT_GE(from[1].get<double>(), 2.0);
+    EXPECT_LE(from[1].get<double>(), 4.0);
+    EXPECT_GE(from[2].get<double>(), -3.0);
+    EXPECT_LE(from[2].get<double>(), 3.0);
+    EXPECT_EQ(a["meshes"][0]["file"], (dir / "src" / "tri.obj").string());
+  }
+  EXPECT_NE(read_json(dir / "a" / "view_v0.json")["camera"], read_json(dir / "a" / "view_v1.json")["camera"]);
+  EXPECT_FALSE(fs::exists(dir / "a" / "view_v3.json"));
+  // The copies load where they are (the mesh path is absolute).
+  const auto info = test::run_raylab("info " + (dir / "a" / "view_v2.json").string());
+  EXPECT_EQ(info.exit_code, 0) << info.output;
+  // Bad arguments: a non-zero exit and no file.
+  for (const char* bad : {" --box=1,2", " --box=1,1,1,0,0,0", "", " --around=0,0,0 --distance 0,1"}) {
+    const Shell r = sh(script + " " + (dir / "c" / "view").string() + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_FALSE(fs::exists(dir / "c" / "view_v0.json")) << bad;
   }
   fs::remove_all(dir);
 }
