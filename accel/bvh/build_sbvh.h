@@ -59,9 +59,9 @@ struct SbvhOptions {
   // walls, ceilings of architectural scenes). On the interior views these
   // cuts are what spatial splits near the root do: camera rays test a
   // quarter to two thirds fewer boxes on the Sponza-based scenes, shadow rays
-  // 4-46 % more (cut, the pieces spread over subtrees whose boxes reach down
-  // to the surface the shadow rays start on). Kept whole, such a reference
-  // goes to the side of its centroid (docs/bvh-speed.md, session 27).
+  // 4-46 % more, along their whole length (not only near the surfaces they
+  // start on). Kept whole, such a reference goes to the side of its centroid
+  // (docs/bvh-speed.md, session 27).
   bool split_planar = true;
 };
 

@@ -466,7 +466,7 @@ AcceleratorInfo bvh_accelerator_info() {
         real_in(0, 4).as_float()},
        {"sbins", "32", "sbvh: spatial split slabs per axis (2..256)", integer_in(2, 256)},
        {"sflat", "1", "sbvh: 1 (spatial splits may cut axis-planar triangles: floors, walls) or 0 (they stay whole: "
-        "fewer nodes for rays that start on such surfaces, such as shadow rays; a study option)",
+        "on the Sponza views fewer box tests for shadow rays, more for camera rays; a study option)",
         integer_of({0, 1})},
        {"opt_rounds", "auto", "reinsertion: at most this many rounds (auto: light 4, reinsert 32; work-bounded: the tree "
         "does not depend on machine load)",
