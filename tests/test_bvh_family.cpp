@@ -130,7 +130,8 @@ std::vector<std::string> family_specs() {
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
         "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0",
         "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert", "bvh:presplit=0.5",
-        "bvh:presplit=2,layout=bvh16,opt=reinsert", "bvh:presplit=0.3,layout=bvh2,opt=none"})
+        "bvh:presplit=2,layout=bvh16,opt=reinsert", "bvh:presplit=0.3,layout=bvh2,opt=none",
+        "bvh:big=0.05,bigroot=0.02,bigmin=32", "bvh:big=0.2,bigmin=16,layout=bvh8,opt=reinsert"})
     specs.push_back(extra);
   return specs;
 }
@@ -955,6 +956,78 @@ TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
     EXPECT_EQ(plain[i].box.aabb().lo, s.mesh.triangle_bounds(i).lo);
     EXPECT_EQ(plain[i].box.aabb().hi, s.mesh.triangle_bounds(i).hi);
   }
+}
+
+// big / bigroot (BuildOptions::big_node, big_root): a node's references whose
+// boxes are large against its own (or the root's) become one child, the rest
+// the other; nothing else about the tree changes.
+TEST(BvhBinned, LargeReferencesGetAChildOfTheirOwn) {
+  // Small triangles filling the unit cube, a floor and a wall across it.
+  test::NamedMesh s = test::soup(3000, 29, 0.05f);
+  const uint32_t first_large = static_cast<uint32_t>(s.mesh.num_triangles());
+  TriangleMesh large;
+  large.vertices = {Vec3f(-0.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, 1.1f),
+                    Vec3f(-0.1f, 0.5f, 1.1f),  Vec3f(0.3f, -0.1f, -0.1f), Vec3f(0.3f, 1.1f, -0.1f),
+                    Vec3f(0.3f, 1.1f, 1.1f),   Vec3f(0.3f, -0.1f, 1.1f)};
+  large.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  s.mesh.append(large);
+  const Prims p = prims_of(s.mesh);
+  // The triangles under a node.
+  auto triangles_under = [](const BinaryBvh& t, uint32_t node) {
+    std::vector<uint32_t> out, stack{node};
+    while (!stack.empty()) {
+      const Bvh2Node& n = t.nodes[stack.back()];
+      stack.pop_back();
+      if (is_leaf(n)) {
+        for (uint32_t k = n.index; k < n.index + n.count; ++k) out.push_back(t.prim_ids[k]);
+      } else {
+        stack.push_back(n.index);
+        stack.push_back(n.index + 1);
+      }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const std::vector<uint32_t> large_ids{first_large, first_large + 1, first_large + 2, first_large + 3};
+  for (int rule = 0; rule < 3; ++rule) {
+    SCOPED_TRACE(rule == 0 ? "off" : rule == 1 ? "big_node" : "big_root");
+    BuildOptions bo;
+    bo.big_node = rule == 1 ? 0.1f : 0.0f;
+    bo.big_root = rule == 2 ? 0.1f : 0.0f;
+    bo.big_min = 1024;
+    const BinaryBvh t = build_binned_sah(p.boxes, p.centroids, bo);
+    check_binary_tree(t, s.mesh, false);
+    ASSERT_FALSE(is_leaf(t.nodes[0]));
+    const std::vector<uint32_t> left = triangles_under(t, t.nodes[0].index);
+    if (rule == 0) EXPECT_NE(left, large_ids) << "centroid splits do not separate by size";
+    else EXPECT_EQ(left, large_ids) << "the floor and the wall, and only they, under the root's first child";
+  }
+  // Only at nodes of at least big_min references.
+  BuildOptions few;
+  few.big_node = 0.1f;
+  few.big_min = 4000;
+  EXPECT_NE(triangles_under(build_binned_sah(p.boxes, p.centroids, few), 1), large_ids);
+  // More than a quarter of a node's references large: an ordinary split.
+  test::NamedMesh longs = test::soup(1200, 7, 3.0f);
+  BuildOptions all;
+  all.big_node = 1e-6f;
+  all.big_min = 16;
+  check_binary_tree(build_binned_sah(prims_of(longs.mesh).boxes, prims_of(longs.mesh).centroids, all), longs.mesh,
+                    false);
+  // Through the spec: the option reaches the builder (the family's brute-force
+  // test checks the hits).
+  // It is on by default.
+  const BuildStats plain = make_accelerator("bvh:opt=none,big=0,bigroot=0")->build(s.mesh);
+  const BuildStats split = make_accelerator("bvh:opt=none")->build(s.mesh);
+  EXPECT_NE(plain.extra.at("sah_tree"), split.extra.at("sah_tree"));
+  EXPECT_EQ(plain.extra.at("big_splits"), 0.0);
+  EXPECT_GE(split.extra.at("big_splits"), 1.0);
+  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,big=0.1"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:builder=lbvh,bigroot=0.1"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:builder=sweep,bigmin=64"), SpecError);
+  EXPECT_NO_THROW(make_accelerator("bvh:builder=sbvh,big=0"));
+  EXPECT_THROW(make_accelerator("bvh:big=2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:bigmin=0"), SpecError);
 }
 
 TEST(BvhPresplit, SpecNeedsTheBinnedBuilder) {

@@ -57,6 +57,7 @@ class BinnedBuilder {
     if (n >= kParallelPartitionSize) scratch_ = HugePageBuffer<BuildRef>(n);
     Box4 bounds, cbounds;
     compute_bounds(refs_.data(), 0, n, bounds, cbounds);
+    root_half_area_ = bounds.half_area();
     build(0, 0, n, bounds, cbounds, opt_.start_depth, refs_.data(), scratch_.data());
     out_.nodes.resize(next_node_.load());
     return std::move(out_);
@@ -173,6 +174,26 @@ class BinnedBuilder {
     return best;
   }
 
+  // The node's large references (BuildOptions::big_node, big_root) moved to
+  // the front of refs[b, e) as the left child, the rest as the right one.
+  // Returns false (refs reordered, nothing else changed) when there are none
+  // or more than a quarter of the node's references.
+  bool split_off_large(BuildRef* refs, size_t b, size_t e, const Box4& bounds, size_t& mid, Box4& lb, Box4& lcb,
+                       Box4& rb, Box4& rcb) const {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    const float limit = std::min(opt_.big_node > 0.0f ? opt_.big_node * bounds.half_area() : kInf,
+                                 opt_.big_root > 0.0f ? opt_.big_root * root_half_area_ : kInf);
+    BuildRef* first_small =
+        std::partition(refs + b, refs + e, [limit](const BuildRef& r) { return r.box.half_area() > limit; });
+    const size_t large = static_cast<size_t>(first_small - (refs + b));
+    if (large == 0 || large > (e - b) / 4) return false;
+    big_splits_.fetch_add(1, std::memory_order_relaxed);
+    mid = b + large;
+    compute_bounds(refs, b, mid, lb, lcb);
+    compute_bounds(refs, mid, e, rb, rcb);
+    return true;
+  }
+
   void make_leaf(uint32_t node, const BuildRef* refs, size_t b, size_t e, const Box4& bounds) {
     for (size_t i = b; i < e; ++i) out_.prim_ids[i] = refs[i].prim();
     set_leaf(nodes_[node], bounds.aabb(), static_cast<uint32_t>(b), static_cast<uint32_t>(e - b));
@@ -192,7 +213,11 @@ class BinnedBuilder {
     BuildRef* child_buf = cur;
     BuildRef* child_other = other;
     bool done = false;
-    if (n <= kSmallSweep && depth < kForceMedianDepth) {
+    if ((opt_.big_node > 0.0f || opt_.big_root > 0.0f) && n >= opt_.big_min && depth < kForceMedianDepth)
+      done = split_off_large(cur, b, e, bounds, mid, lb, lcb, rb, rcb);
+    if (done) {
+      // the large references on the left, the rest on the right
+    } else if (n <= kSmallSweep && depth < kForceMedianDepth) {
       const Split s = small_sweep(cur, b, e, mid, lcb, rcb);
       const float area = bounds.half_area();
       const float split_cost = opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);
@@ -265,20 +290,28 @@ class BinnedBuilder {
   // references or more), uninitialised: every element is written before it is read.
   HugePageBuffer<BuildRef> scratch_;
   Bvh2Node* nodes_ = nullptr;  // out_.nodes.data()
+  float root_half_area_ = 0.0f;
   BuildOptions opt_;
   BinaryBvh out_;
   std::atomic<uint32_t> next_node_{1};
+  mutable std::atomic<size_t> big_splits_{0};
+
+ public:
+  size_t big_splits() const { return big_splits_.load(); }
 };
 
 }  // namespace
 
-BinaryBvh build_binned_sah(std::vector<BuildRef> refs, const BuildOptions& options) {
-  return BinnedBuilder(std::move(refs), options).run();
+BinaryBvh build_binned_sah(std::vector<BuildRef> refs, const BuildOptions& options, BinnedBuildStats* stats) {
+  BinnedBuilder builder(std::move(refs), options);
+  BinaryBvh tree = builder.run();
+  if (stats) stats->big_splits = builder.big_splits();
+  return tree;
 }
 
 BinaryBvh build_binned_sah(std::span<const Aabb> boxes, std::span<const Vec3f> centroids,
-                           const BuildOptions& options) {
-  return build_binned_sah(make_build_refs(boxes, centroids), options);
+                           const BuildOptions& options, BinnedBuildStats* stats) {
+  return build_binned_sah(make_build_refs(boxes, centroids), options, stats);
 }
 
 }  // namespace raylab

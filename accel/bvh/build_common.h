@@ -113,6 +113,16 @@ struct BuildOptions {
   int start_depth = 0;    // depth of the root (when building a subtree of a larger tree)
   float traversal_cost = 1.0f;     // C_t used for split decisions
   float intersection_cost = 1.0f;  // C_i used for split decisions (per reference)
+  // Large references in a child of their own (binned builder only; 0 = off):
+  // at a node of at least big_min references, those whose boxes' half areas
+  // exceed big_node x the node's, or big_root x the root's, become one child
+  // and the rest the other, when they are at least one and at most a quarter
+  // of the node's references. Centroid splits never separate references by
+  // size, so a floor or a wall otherwise stretches the box of every node on
+  // its way down (build_binned_sah.cpp; docs/bvh-speed.md, session 28).
+  float big_node = 0.0f;
+  float big_root = 0.0f;
+  size_t big_min = 1024;
 };
 
 // Beyond this depth top-down builders split at the object median, so depth and
