@@ -566,7 +566,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // large references as a child of their own. Centroid splits never
         // separate references by size, so a floor stretches the box of every
         // node down to its leaf; with the split, camera rays walk 7 % fewer
-        // nodes and shadow rays 21 % fewer over 35 views of the interior
+        // nodes and shadow rays 21 % fewer over 34 views of the interior
         // scenes, 2-5 % faster on every ray set (docs/bvh-speed.md, session 28).
         c.big_node = static_cast<float>(p.real("big"));
         c.big_root = static_cast<float>(p.real("bigroot"));
