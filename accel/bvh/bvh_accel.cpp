@@ -567,7 +567,8 @@ AcceleratorInfo bvh_accelerator_info() {
         // separate references by size, so a floor stretches the box of every
         // node down to its leaf; with the split, camera rays walk 7 % fewer
         // nodes and shadow rays 21 % fewer over 34 views of the interior
-        // scenes, 2-5 % faster on every ray set (docs/bvh-speed.md, session 28).
+        // scenes; primary and diffuse rays 3-5 % faster, shadow 1-8 %, random
+        // 0-2 % (conference's shadow rays 6 % slower; docs/bvh-speed.md, session 28).
         c.big_node = static_cast<float>(p.real("big"));
         c.big_root = static_cast<float>(p.real("bigroot"));
         c.big_min = p.integer("bigmin");
