@@ -1006,17 +1006,20 @@ TEST(BvhBinned, LargeReferencesGetAChildOfTheirOwn) {
   BuildOptions few;
   few.big_node = 0.1f;
   few.big_min = 4000;
-  EXPECT_NE(triangles_under(build_binned_sah(p.boxes, p.centroids, few), 1), large_ids);
-  // More than a quarter of a node's references large: an ordinary split.
+  BinnedBuildStats few_stats;
+  EXPECT_NE(triangles_under(build_binned_sah(p.boxes, p.centroids, few, &few_stats), 1), large_ids);
+  EXPECT_EQ(few_stats.big_splits, 0u);
+  // More than a quarter of a node's references large: ordinary splits only.
   test::NamedMesh longs = test::soup(1200, 7, 3.0f);
+  const Prims lp = prims_of(longs.mesh);
   BuildOptions all;
   all.big_node = 1e-6f;
   all.big_min = 16;
-  check_binary_tree(build_binned_sah(prims_of(longs.mesh).boxes, prims_of(longs.mesh).centroids, all), longs.mesh,
-                    false);
-  // Through the spec: the option reaches the builder (the family's brute-force
+  BinnedBuildStats all_stats;
+  check_binary_tree(build_binned_sah(lp.boxes, lp.centroids, all, &all_stats), longs.mesh, false);
+  EXPECT_EQ(all_stats.big_splits, 0u);
+  // Through the spec, where it is on by default (the family's brute-force
   // test checks the hits).
-  // It is on by default.
   const BuildStats plain = make_accelerator("bvh:opt=none,big=0,bigroot=0")->build(s.mesh);
   const BuildStats split = make_accelerator("bvh:opt=none")->build(s.mesh);
   EXPECT_NE(plain.extra.at("sah_tree"), split.extra.at("sah_tree"));

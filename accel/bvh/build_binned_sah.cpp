@@ -179,7 +179,7 @@ class BinnedBuilder {
   // Returns false (refs reordered, nothing else changed) when there are none
   // or more than a quarter of the node's references.
   bool split_off_large(BuildRef* refs, size_t b, size_t e, const Box4& bounds, size_t& mid, Box4& lb, Box4& lcb,
-                       Box4& rb, Box4& rcb) const {
+                       Box4& rb, Box4& rcb) {
     constexpr float kInf = std::numeric_limits<float>::infinity();
     const float limit = std::min(opt_.big_node > 0.0f ? opt_.big_node * bounds.half_area() : kInf,
                                  opt_.big_root > 0.0f ? opt_.big_root * root_half_area_ : kInf);
@@ -294,7 +294,7 @@ class BinnedBuilder {
   BuildOptions opt_;
   BinaryBvh out_;
   std::atomic<uint32_t> next_node_{1};
-  mutable std::atomic<size_t> big_splits_{0};
+  std::atomic<size_t> big_splits_{0};
 
  public:
   size_t big_splits() const { return big_splits_.load(); }
