@@ -958,6 +958,80 @@ TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
   }
 }
 
+// A build reference carries its box's half area in lane 3 of hi, computed as
+// Box4::half_area computes it, and a union of references' boxes carries the
+// largest: the size split skips its pass over a node's references on it.
+TEST(BvhBinned, ReferenceBoxesCarryTheirLargestHalfArea) {
+  const Aabb a(Vec3f(0, 0, 0), Vec3f(1, 2, 3)), b(Vec3f(5, 5, 5), Vec3f(5.5f, 5, 7)), flat(Vec3f(1, 1, 1), Vec3f(1, 1, 4));
+  const BuildRef ra = BuildRef::make(a, a.center(), 0), rb = BuildRef::make(b, b.center(), 1),
+                 rf = BuildRef::make(flat, flat.center(), 2);
+  EXPECT_EQ(ra.box.max_ref_half_area(), ra.box.half_area());
+  EXPECT_EQ(ra.box.max_ref_half_area(), 11.0f);
+  EXPECT_EQ(rb.box.max_ref_half_area(), 1.0f);
+  EXPECT_EQ(rf.box.max_ref_half_area(), 0.0f);
+  EXPECT_EQ(merge(rb.box, ra.box).max_ref_half_area(), 11.0f);
+  EXPECT_EQ(merge(rf.box, rb.box).max_ref_half_area(), 1.0f);
+  EXPECT_EQ(merge(ra.box, rb.box).half_area(), Box4::from(Aabb(Vec3f(0, 0, 0), Vec3f(5.5f, 5, 7))).half_area());
+  EXPECT_EQ(Box4::from(a).max_ref_half_area(), 0.0f) << "boxes not made from references carry 0";
+  // A denormal area is stored as the smallest normal float: still a bound.
+  const Aabb tiny(Vec3f(0, 0, 0), Vec3f(1e-20f, 1e-20f, 0));
+  const BuildRef rt = BuildRef::make(tiny, tiny.center(), 3);
+  EXPECT_GT(rt.box.half_area(), 0.0f);
+  EXPECT_LT(rt.box.half_area(), std::numeric_limits<float>::min());
+  EXPECT_EQ(rt.box.max_ref_half_area(), std::numeric_limits<float>::min());
+  // The bins keep the largest too (the children's boxes come from them).
+  Box4 cbounds;
+  for (const BuildRef* r : {&ra, &rb, &rf}) cbounds.extend(r->centroid());
+  const sah::Binning bn(cbounds, 4);
+  const BuildRef refs[] = {ra, rb, rf};
+  const auto bins = sah::bin_refs(refs, 0, 3, bn, 4);
+  float largest = 0.0f;
+  for (int bin = 0; bin < 4; ++bin)
+    if (bins->count[0][bin]) largest = std::max(largest, bins->box(0, bin).max_ref_half_area());
+  EXPECT_EQ(largest, 11.0f);
+}
+
+// One thread and the default pool give the same binned tree: the one-thread
+// path partitions large nodes in one pass (the split's left count placing the
+// right side), the parallel one counts per chunk first; both are stable.
+TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
+  test::NamedMesh s = test::soup(40000, 31, 0.02f);
+  const Prims p = prims_of(s.mesh);
+  BuildOptions bo;
+  bo.big_node = 0.1f;
+  bo.big_root = 0.03f;
+  const BinaryBvh pool = build_binned_sah(p.boxes, p.centroids, bo);
+  BinaryBvh serial;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    serial = build_binned_sah(p.boxes, p.centroids, bo);
+  }
+  check_binary_tree(serial, s.mesh, false);
+  ASSERT_EQ(serial.nodes.size(), pool.nodes.size());
+  EXPECT_EQ(serial.prim_ids, pool.prim_ids);
+  // Node numbers follow the order the subtree tasks ran in: the trees are
+  // compared node by node from the root.
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
+  size_t visited = 0;
+  while (!stack.empty()) {
+    const auto [a, b] = stack.back();
+    stack.pop_back();
+    ++visited;
+    const Bvh2Node &x = serial.nodes[a], &y = pool.nodes[b];
+    ASSERT_EQ(x.bounds().lo, y.bounds().lo) << a;
+    ASSERT_EQ(x.bounds().hi, y.bounds().hi) << a;
+    ASSERT_EQ(is_leaf(x), is_leaf(y)) << a;
+    if (is_leaf(x)) {
+      ASSERT_EQ(x.index, y.index) << a;
+      ASSERT_EQ(x.count, y.count) << a;
+    } else {
+      stack.emplace_back(x.index, y.index);
+      stack.emplace_back(x.index + 1, y.index + 1);
+    }
+  }
+  EXPECT_EQ(visited, serial.nodes.size());
+}
+
 // big / bigroot (BuildOptions::big_node, big_root): a node's references whose
 // boxes are large against its own (or the root's) become one child, the rest
 // the other; nothing else about the tree changes.

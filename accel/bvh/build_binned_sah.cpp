@@ -7,11 +7,14 @@
 #include <cstdlib>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include "accel/bvh/huge_page_allocator.h"
 #include "accel/bvh/sah_binning.h"
@@ -96,10 +99,28 @@ class BinnedBuilder {
     }
   }
 
-  // Parallel stable partition of src[b, e) into dst[b, e).
+  // Parallel stable partition of src[b, e) into dst[b, e). With one thread
+  // the same order in one pass: the split's left count (exact, as left_of
+  // matches the bins) places the right side without a counting pass.
   size_t partition_parallel(const BuildRef* src, BuildRef* dst, size_t b, size_t e, const Binning& bn,
                             const Split& s, Box4& lc, Box4& rc) const {
     const size_t n = e - b;
+    if (tbb::this_task_arena::max_concurrency() == 1 ||
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1) {
+      size_t l = b, r = b + s.left_count;
+      for (size_t i = b; i < e; ++i) {
+        if (bn.left_of(src[i], s.axis, s.pos)) {
+          lc.extend(src[i].centroid());
+          dst[l++] = src[i];
+        } else {
+          if (r == e) throw std::logic_error("bvh: binned partition disagrees with the bins");
+          rc.extend(src[i].centroid());
+          dst[r++] = src[i];
+        }
+      }
+      if (l != b + s.left_count) throw std::logic_error("bvh: binned partition disagrees with the bins");
+      return l;
+    }
     const size_t chunks = std::min<size_t>(256, (n + 8191) / 8192);
     const size_t chunk = (n + chunks - 1) / chunks;
     std::vector<size_t> left(chunks), loff(chunks), roff(chunks);
@@ -176,13 +197,16 @@ class BinnedBuilder {
 
   // The node's large references (BuildOptions::big_node, big_root) moved to
   // the front of refs[b, e) as the left child, the rest as the right one.
-  // Returns false (refs reordered, nothing else changed) when there are none
-  // or more than a quarter of the node's references.
+  // Returns false (refs perhaps reordered, nothing else changed) when there
+  // are none or more than a quarter of the node's references.
+  // Nothing moves where no reference is large, which the node's box tells
+  // without a pass over them (lane 3: the largest reference half area).
   bool split_off_large(BuildRef* refs, size_t b, size_t e, const Box4& bounds, size_t& mid, Box4& lb, Box4& lcb,
                        Box4& rb, Box4& rcb) {
     constexpr float kInf = std::numeric_limits<float>::infinity();
     const float limit = std::min(opt_.big_node > 0.0f ? opt_.big_node * bounds.half_area() : kInf,
                                  opt_.big_root > 0.0f ? opt_.big_root * root_half_area_ : kInf);
+    if (!(bounds.max_ref_half_area() > limit)) return false;
     BuildRef* first_small =
         std::partition(refs + b, refs + e, [limit](const BuildRef& r) { return r.box.half_area() > limit; });
     const size_t large = static_cast<size_t>(first_small - (refs + b));
@@ -231,8 +255,13 @@ class BinnedBuilder {
       // empty, and sweeping them costs more than binning.
       const int nb = bins_for(n, opt_.bins);
       const Binning bn(cbounds, nb);
-      const auto bins = bin_refs(cur, b, e, bn, nb);
-      const Split s = find_binned_split(*bins, bn, nb);
+      // One bin set per thread, reused: nothing between the binning and the
+      // split search can run another node's build on this thread (no TBB
+      // wait; the parallel binning's reducers have bin sets of their own).
+      thread_local std::unique_ptr<BinSet> node_bins;
+      if (!node_bins) node_bins.reset(new BinSet);
+      bin_refs(cur, b, e, bn, nb, *node_bins);
+      const Split s = find_binned_split(*node_bins, bn, nb);
       const float area = bounds.half_area();
       const float split_cost =
           opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -19,8 +20,12 @@
 
 namespace raylab {
 
-// Axis-aligned box in two SSE registers; lane 3 is kept at 0 so arithmetic on
-// it never touches denormals or NaNs.
+// Axis-aligned box in two SSE registers. Lane 3 of lo is kept at 0, lane 3
+// of hi at 0 or a normal or infinite float (never a denormal or a NaN), so
+// arithmetic on it never is slow or invalid. A build reference keeps its
+// box's half area there (BuildRef::make), and every union of references'
+// boxes (extend, merge, the bins) then carries the largest of them: the
+// size split's test for free (build_binned_sah.cpp).
 struct Box4 {
   __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity());
   __m128 hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
@@ -52,6 +57,9 @@ struct Box4 {
     _mm_store_ps(v, lo);
     return v[a];
   }
+  // Lane 3 of hi: the largest half area of the references whose boxes
+  // were merged into this box (0 for boxes not made from references).
+  float max_ref_half_area() const { return _mm_cvtss_f32(_mm_shuffle_ps(hi, hi, _MM_SHUFFLE(3, 3, 3, 3))); }
   float hi_at(int a) const {
     alignas(16) float v[4];
     _mm_store_ps(v, hi);
@@ -73,7 +81,8 @@ inline Box4 merge(const Box4& a, const Box4& b) {
 
 // One build reference: the box of a primitive (or of the part of it a spatial
 // split kept), its centroid, and the primitive id stored in the centroid's
-// lane 3 (as raw bits; masked off before any arithmetic).
+// lane 3 (as raw bits; masked off before any arithmetic). Lane 3 of the
+// box's hi holds the box's half area (Box4::max_ref_half_area).
 struct BuildRef {
   Box4 box;
   __m128 c;
@@ -92,6 +101,14 @@ struct BuildRef {
   static BuildRef make(const Aabb& b, const Vec3f& centroid, uint32_t prim) {
     BuildRef r;
     r.box = Box4::from(b);
+    // The same arithmetic as Box4::half_area, so that a comparison of the
+    // stored value decides as one of half_area() would; denormals rounded up
+    // to the smallest normal float (an upper bound stays an upper bound).
+    const float area = r.box.half_area();
+    alignas(16) float hi[4];
+    _mm_store_ps(hi, r.box.hi);
+    hi[3] = area > 0.0f && area < std::numeric_limits<float>::min() ? std::numeric_limits<float>::min() : area;
+    r.box.hi = _mm_load_ps(hi);
     float bits;
     std::memcpy(&bits, &prim, sizeof bits);
     r.c = _mm_setr_ps(centroid.x(), centroid.y(), centroid.z(), bits);
