@@ -511,6 +511,46 @@ TEST(BvhBuilders, BoundaryTestAgreesWithTheBins) {
   }
 }
 
+// bin_refs spreads long ranges over two or four bin sets (and the longest
+// over threads) and merges them: the same boxes and counts as binning the
+// references one by one into one set, for every range length's path and
+// remainder.
+TEST(BvhBuilders, BinningMatchesOneByOne) {
+  const test::NamedMesh s = test::soup(40000, 17, 0.05f);
+  const Prims p = prims_of(s.mesh);
+  const std::vector<BuildRef> refs = make_build_refs(p.boxes, p.centroids);
+  for (size_t n : {size_t{7}, size_t{255}, size_t{256}, size_t{1001}, size_t{2047}, size_t{2048}, size_t{5003},
+                   size_t{40000}}) {
+    for (int nb : {8, 64}) {
+      SCOPED_TRACE(fmt::format("{} references, {} bins", n, nb));
+      const size_t b = refs.size() - n;
+      Box4 cb;
+      for (size_t i = b; i < refs.size(); ++i) cb.extend(refs[i].centroid());
+      const sah::Binning bn(cb, nb);
+      const auto bins = sah::bin_refs(refs.data(), b, refs.size(), bn, nb);
+      std::vector<Box4> box(3 * nb);
+      std::vector<uint32_t> count(3 * nb, 0);
+      for (size_t i = b; i < refs.size(); ++i) {
+        alignas(16) int32_t bin[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(bin), bn.bins_of(refs[i]));
+        for (int a = 0; a < 3; ++a) {
+          box[a * nb + bin[a]].extend(refs[i].box);
+          ++count[a * nb + bin[a]];
+        }
+      }
+      for (int a = 0; a < 3; ++a)
+        for (int k = 0; k < nb; ++k) {
+          ASSERT_EQ(bins->count[a][k], count[a * nb + k]) << a << " " << k;
+          if (!count[a * nb + k]) continue;
+          const Box4 got = bins->box(a, k), want = box[a * nb + k];
+          ASSERT_EQ(got.aabb().lo, want.aabb().lo) << a << " " << k;
+          ASSERT_EQ(got.aabb().hi, want.aabb().hi) << a << " " << k;
+          ASSERT_EQ(got.max_ref_half_area(), want.max_ref_half_area()) << a << " " << k;
+        }
+    }
+  }
+}
+
 TEST(BvhBuilders, SweepIsNoWorseThanBinnedAndLbvhNoBetter) {
   // The full sweep evaluates a superset of the binned candidates at each
   // node; LBVH ignores the SAH. Compared on a clustered scene.
