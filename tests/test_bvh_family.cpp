@@ -610,6 +610,63 @@ double greedy_cost(const BinaryBvh& t, const CollapseOptions& o, const std::vect
   return cost / t.nodes[0].bounds().half_area();
 }
 
+// The collapse's optimum against the recurrence of collapse_wide.h evaluated
+// plainly (doubles, every k, no slot bounds): the vectorised min-plus step
+// (every slot budget at once, AVX-512) must reach the same value.
+TEST(BvhCollapse, OptimumMatchesThePlainRecurrence) {
+  const test::NamedMesh s = test::soup(2500, 43);
+  for (const char* b : {"binned", "reinsert"}) {
+    const BinaryBvh tree = build_with(b, s.mesh);
+    const std::vector<uint32_t> counts = subtree_ref_counts(tree.nodes);
+    for (int width : {2, 4, 8, 16}) {
+      SCOPED_TRACE(fmt::format("{} width {}", b, width));
+      CollapseOptions o;
+      o.width = width;
+      o.block_width = width == 2 ? 1 : 4;
+      o.max_leaf = width == 2 ? 4 : 8;
+      o.node_cost = 2.0f;
+      const double inf = std::numeric_limits<double>::infinity();
+      // C[n][i - 1] for i = 1..width, children before parents (indices grow downwards).
+      std::vector<std::vector<double>> c(tree.nodes.size());
+      auto leaf = [&](uint32_t n, bool forced) {
+        const uint32_t blocks = (counts[n] + o.block_width - 1) / o.block_width;
+        if (!forced && (counts[n] > static_cast<uint32_t>(o.max_leaf) ||
+                        blocks > static_cast<uint32_t>(o.max_leaf_blocks)))
+          return inf;
+        return static_cast<double>(tree.nodes[n].bounds().half_area()) * o.block_cost * blocks;
+      };
+      std::vector<uint32_t> order{0};
+      for (size_t k = 0; k < order.size(); ++k)
+        if (!is_leaf(tree.nodes[order[k]])) {
+          order.push_back(tree.nodes[order[k]].index);
+          order.push_back(tree.nodes[order[k]].index + 1);
+        }
+      for (auto it = order.rbegin(); it != order.rend(); ++it) {
+        const uint32_t n = *it;
+        c[n].assign(width, 0.0);
+        if (is_leaf(tree.nodes[n])) {
+          std::fill(c[n].begin(), c[n].end(), leaf(n, true));
+          continue;
+        }
+        const auto& cl = c[tree.nodes[n].index];
+        const auto& cr = c[tree.nodes[n].index + 1];
+        auto d = [&](int i) {
+          double best = inf;
+          for (int k = 1; k < i; ++k) best = std::min(best, cl[k - 1] + cr[i - k - 1]);
+          return best;
+        };
+        c[n][0] = std::min(leaf(n, false),
+                           static_cast<double>(tree.nodes[n].bounds().half_area()) * o.node_cost + d(width));
+        for (int i = 2; i <= width; ++i) c[n][i - 1] = std::min(c[n][i - 2], d(i));
+      }
+      const WideTree w = collapse_to_wide(tree, o);
+      const double want = c[0][0] / tree.nodes[0].bounds().half_area();
+      EXPECT_NEAR(w.dp_cost, want, 1e-4 * want);
+      EXPECT_NEAR(collapse_cost(w, o), want, 1e-3 * want);
+    }
+  }
+}
+
 TEST(BvhCollapse, EveryTriangleReachableOnceAndBoxesEnclose) {
   const test::NamedMesh s = test::soup(3000, 41);
   for (const char* b : {"binned", "lbvh", "reinsert"}) {
