@@ -1132,45 +1132,47 @@ TEST(BvhBinned, ReferenceBoxesCarryTheirLargestHalfArea) {
   EXPECT_EQ(largest, 11.0f);
 }
 
-// One thread and the default pool give the same binned tree: the one-thread
-// path partitions large nodes in one pass (the split's left count placing the
-// right side), the parallel one counts per chunk first; both are stable.
+// One thread and the default pool give the same binned tree, node for node
+// (the pool's subtree tasks number their nodes as they run; the build
+// renumbers them as the serial build does), and so do two runs of the pool:
+// the one-thread path partitions large nodes in one pass (the split's left
+// count placing the right side), the parallel one counts per chunk first;
+// both are stable. The same for the accelerator's whole build, reinsertion
+// (whose ties follow the numbering) and layout included.
 TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
   test::NamedMesh s = test::soup(40000, 31, 0.02f);
   const Prims p = prims_of(s.mesh);
   BuildOptions bo;
   bo.big_node = 0.1f;
   bo.big_root = 0.03f;
+  bo.leaf_threshold = 1;
   const BinaryBvh pool = build_binned_sah(p.boxes, p.centroids, bo);
+  const BinaryBvh pool2 = build_binned_sah(p.boxes, p.centroids, bo);
   BinaryBvh serial;
+  BuildStats serial_stats;
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     serial = build_binned_sah(p.boxes, p.centroids, bo);
+    serial_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
   }
   check_binary_tree(serial, s.mesh, false);
-  ASSERT_EQ(serial.nodes.size(), pool.nodes.size());
-  EXPECT_EQ(serial.prim_ids, pool.prim_ids);
-  // Node numbers follow the order the subtree tasks ran in: the trees are
-  // compared node by node from the root.
-  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
-  size_t visited = 0;
-  while (!stack.empty()) {
-    const auto [a, b] = stack.back();
-    stack.pop_back();
-    ++visited;
-    const Bvh2Node &x = serial.nodes[a], &y = pool.nodes[b];
-    ASSERT_EQ(x.bounds().lo, y.bounds().lo) << a;
-    ASSERT_EQ(x.bounds().hi, y.bounds().hi) << a;
-    ASSERT_EQ(is_leaf(x), is_leaf(y)) << a;
-    if (is_leaf(x)) {
-      ASSERT_EQ(x.index, y.index) << a;
-      ASSERT_EQ(x.count, y.count) << a;
-    } else {
-      stack.emplace_back(x.index, y.index);
-      stack.emplace_back(x.index + 1, y.index + 1);
+  for (const BinaryBvh* t : {&pool, &pool2}) {
+    ASSERT_EQ(serial.nodes.size(), t->nodes.size());
+    EXPECT_EQ(serial.prim_ids, t->prim_ids);
+    for (size_t i = 0; i < t->nodes.size(); ++i) {
+      ASSERT_EQ(serial.nodes[i].index, t->nodes[i].index) << i;
+      ASSERT_EQ(serial.nodes[i].count, t->nodes[i].count) << i;
+      ASSERT_EQ(serial.nodes[i].bounds().lo, t->nodes[i].bounds().lo) << i;
+      ASSERT_EQ(serial.nodes[i].bounds().hi, t->nodes[i].bounds().hi) << i;
     }
   }
-  EXPECT_EQ(visited, serial.nodes.size());
+  const BuildStats pool_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
+  EXPECT_EQ(pool_stats.extra.at("opt_moves"), serial_stats.extra.at("opt_moves"));
+  // (a parallel sum: equal up to the order of its additions)
+  EXPECT_NEAR(pool_stats.extra.at("sah_tree"), serial_stats.extra.at("sah_tree"),
+              1e-9 * serial_stats.extra.at("sah_tree"));
+  EXPECT_EQ(pool_stats.nodes, serial_stats.nodes);
+  EXPECT_EQ(pool_stats.bytes, serial_stats.bytes);
 }
 
 // big / bigroot (BuildOptions::big_node, big_root): a node's references whose

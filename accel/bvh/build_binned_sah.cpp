@@ -58,11 +58,14 @@ class BinnedBuilder {
     nodes_ = out_.nodes.data();
     out_.prim_ids.resize(n);
     if (n >= kParallelPartitionSize) scratch_ = HugePageBuffer<BuildRef>(n);
+    serial_ = tbb::this_task_arena::max_concurrency() == 1 ||
+              tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1;
     Box4 bounds, cbounds;
     compute_bounds(refs_.data(), 0, n, bounds, cbounds);
     root_half_area_ = bounds.half_area();
     build(0, 0, n, bounds, cbounds, opt_.start_depth, refs_.data(), scratch_.data());
     out_.nodes.resize(next_node_.load());
+    if (!serial_ && n >= kParallelTaskSize) renumber();
     return std::move(out_);
   }
 
@@ -99,14 +102,43 @@ class BinnedBuilder {
     }
   }
 
+  // Subtree tasks take their node numbers in the order they happen to run:
+  // the nodes renumbered in the order of the serial build (a node's two
+  // children take the next two numbers when it is reached, its left subtree
+  // is numbered before its right one), so that the tree, and everything
+  // derived from its numbering (the reinsertion's ties, the layouts), is the
+  // same for every thread count and every run.
+  void renumber() {
+    const size_t m = out_.nodes.size();
+    UninitHugePageVector<Bvh2Node> canon;
+    canon.resize(m);
+    canon[0] = out_.nodes[0];
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (old number, new number)
+    uint32_t next = 1;
+    while (!stack.empty()) {
+      const auto [from, to] = stack.back();
+      stack.pop_back();
+      const Bvh2Node& node = out_.nodes[from];
+      if (node.count != 0) continue;
+      const uint32_t left = next;
+      next += 2;
+      canon[to].index = left;
+      canon[left] = out_.nodes[node.index];
+      canon[left + 1] = out_.nodes[node.index + 1];
+      stack.emplace_back(node.index + 1, left + 1);
+      stack.emplace_back(node.index, left);
+    }
+    if (next != m) throw std::logic_error("bvh: binned build left unreachable nodes");
+    out_.nodes.swap(canon);
+  }
+
   // Parallel stable partition of src[b, e) into dst[b, e). With one thread
   // the same order in one pass: the split's left count (exact, as left_of
   // matches the bins) places the right side without a counting pass.
   size_t partition_parallel(const BuildRef* src, BuildRef* dst, size_t b, size_t e, const Binning& bn,
                             const Split& s, Box4& lc, Box4& rc) const {
     const size_t n = e - b;
-    if (tbb::this_task_arena::max_concurrency() == 1 ||
-        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) == 1) {
+    if (serial_) {
       size_t l = b, r = b + s.left_count;
       for (size_t i = b; i < e; ++i) {
         if (bn.left_of(src[i], s.axis, s.pos)) {
@@ -305,7 +337,7 @@ class BinnedBuilder {
     nd.set_bounds(bounds.aabb());
     nd.index = left;
     nd.count = 0;
-    if (n >= kParallelTaskSize) {
+    if (n >= kParallelTaskSize && !serial_) {
       tbb::parallel_invoke([&] { build(left, b, mid, lb, lcb, depth + 1, child_buf, child_other); },
                            [&] { build(left + 1, mid, e, rb, rcb, depth + 1, child_buf, child_other); });
     } else {
@@ -320,6 +352,9 @@ class BinnedBuilder {
   HugePageBuffer<BuildRef> scratch_;
   Bvh2Node* nodes_ = nullptr;  // out_.nodes.data()
   float root_half_area_ = 0.0f;
+  // One thread: the subtrees built in turn (left first), the nodes numbered
+  // as they are reached, and the large nodes partitioned in one pass.
+  bool serial_ = false;
   BuildOptions opt_;
   BinaryBvh out_;
   std::atomic<uint32_t> next_node_{1};
