@@ -2,8 +2,6 @@
 
 #include "accel/bvh/huge_page_allocator.h"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -144,7 +142,18 @@ class Collapser {
     slots_[n] = static_cast<uint8_t>(sn);
     float d[kMaxWideWidth + 1];
     uint8_t dk[kMaxWideWidth + 1];
-    min_plus(cl, cr, sl, sr, sn, d, dk);
+    for (int i = 2; i <= sn; ++i) {
+      float best = kInf;
+      uint8_t best_k = 1;
+      for (int k = std::max(1, i - sr), k_end = std::min(i - 1, sl); k <= k_end; ++k) {
+        const float v = cl[k - 1] + cr[i - k - 1];
+        const bool better = v < best;
+        best = better ? v : best;
+        best_k = better ? static_cast<uint8_t>(k) : best_k;
+      }
+      d[i] = best;
+      dk[i] = best_k;
+    }
     // D(n, i) = D(n, sn) for i > sn, so C(n, i) = C(n, sn) there with the
     // choice "fewer slots" (0): a running minimum up to sn, then a fill.
     const float area = node.bounds().half_area();
@@ -164,58 +173,6 @@ class Collapser {
       ch[i] = 0;
     }
     inner_split_[n] = dk[sn];
-  }
-
-  // D(n, i) = min over k of C(l, k) + C(r, i - k) for i = 2..sn, with k in
-  // [max(1, i - sr), min(i - 1, sl)] (see solve), and the k of the first
-  // minimum, into d[i] and dk[i]. With AVX-512 every i at once, one lane
-  // each (lane t is i = t + 1), k in the same ascending order with the same
-  // strict comparison, so the same choices as the scalar loop; the 16-wide
-  // collapse spent most of its time in that loop.
-  void min_plus(const float* cl, const float* cr, int sl, int sr, int sn, float* d, uint8_t* dk) const {
-#if defined(__AVX512F__)
-    const __mmask16 in_width = static_cast<__mmask16>((1u << n_) - 1u);
-    const __m512 right = _mm512_maskz_loadu_ps(in_width, cr);
-    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    const __mmask16 up_to_sn = static_cast<__mmask16>((1u << sn) - 1u);
-    __m512 best = _mm512_set1_ps(kInf);
-    __m512i best_k = _mm512_set1_epi32(1);
-    const int k_end = std::min(sl, sn - 1);
-    for (int k = 1; k <= k_end; ++k) {
-      const __m512i kv = _mm512_set1_epi32(k);
-      // Lane t (i = t + 1) takes k when k + 1 <= i <= k + sr, i.e. k <= t <= k + sr - 1.
-      const __mmask16 valid = up_to_sn & _mm512_cmpge_epi32_mask(lane, kv) &
-                              _mm512_cmple_epi32_mask(lane, _mm512_set1_epi32(k + sr - 1));
-      // cr[t - k]; the zero-masked form (all lanes) because GCC 12 warns on
-      // the plain one's internal undefined operand.
-      const __m512 shifted = _mm512_maskz_permutexvar_ps(0xFFFF, _mm512_sub_epi32(lane, kv), right);
-      const __m512 v = _mm512_add_ps(_mm512_set1_ps(cl[k - 1]), shifted);
-      const __mmask16 better = valid & _mm512_cmp_ps_mask(v, best, _CMP_LT_OQ);
-      best = _mm512_mask_mov_ps(best, better, v);
-      best_k = _mm512_mask_mov_epi32(best_k, better, kv);
-    }
-    alignas(64) float bv[16];
-    alignas(64) int32_t kk[16];
-    _mm512_store_ps(bv, best);
-    _mm512_store_si512(kk, best_k);
-    for (int i = 2; i <= sn; ++i) {
-      d[i] = bv[i - 1];
-      dk[i] = static_cast<uint8_t>(kk[i - 1]);
-    }
-#else
-    for (int i = 2; i <= sn; ++i) {
-      float best = kInf;
-      uint8_t best_k = 1;
-      for (int k = std::max(1, i - sr), k_end = std::min(i - 1, sl); k <= k_end; ++k) {
-        const float v = cl[k - 1] + cr[i - k - 1];
-        const bool better = v < best;
-        best = better ? v : best;
-        best_k = better ? static_cast<uint8_t>(k) : best_k;
-      }
-      d[i] = best;
-      dk[i] = best_k;
-    }
-#endif
   }
 
   // The binary nodes that become the child slots when n gets i slots.

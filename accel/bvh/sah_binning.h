@@ -285,9 +285,8 @@ inline void sweep_bins(int nb, float& best_cost, BoxOf&& box, LeftOf&& left_of, 
   }
 }
 
-// The cheapest bin boundary over the three axes (axis -1 when none splits),
-// one boundary after another.
-inline Split find_binned_split_scalar(const BinSet& bins, const Binning& bn, int nb) {
+// The cheapest bin boundary over the three axes (axis -1 when none splits).
+inline Split find_binned_split(const BinSet& bins, const Binning& bn, int nb) {
   Split best;
   for (int a = 0; a < 3; ++a) {
     if (bn.scale_s[a] <= 0.0f) continue;
@@ -303,121 +302,6 @@ inline Split find_binned_split_scalar(const BinSet& bins, const Binning& bn, int
         });
   }
   return best;
-}
-
-#if defined(__AVX512F__)
-// The same for at most sixteen bins (the nodes of 17 to 1023 references,
-// bins_for in build_binned_sah.cpp), every boundary of an axis at once: the
-// bins' coordinates gathered one lane per bin, the boxes left and right of
-// each boundary by log-step min scans (the his are stored negated, so both
-// bounds are minima), the counts by sums, the costs in the scalar sweep's
-// arithmetic and order, and the first lane of the smallest cost taken when
-// it is below the best so far: the same choice as the sweep. The winner's
-// boxes are then merged from its bins as the sweep merges them.
-inline Split find_binned_split_avx512(const BinSet& bins, const Binning& bn, int nb) {
-  const __mmask16 all = 0xFFFF;
-  const __mmask16 in_bins = static_cast<__mmask16>((1u << nb) - 1u);
-  const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __m512 inf = _mm512_set1_ps(std::numeric_limits<float>::infinity());
-  const __m512i zero = _mm512_setzero_si512();
-  // Lane i takes lane i - s (i >= s) / i + s (i + s < 16), else `fill`.
-  const auto from_left = [all](__m512i v, __m512i fill, int s) {
-    switch (s) {
-      case 1: return _mm512_maskz_alignr_epi32(all, v, fill, 15);
-      case 2: return _mm512_maskz_alignr_epi32(all, v, fill, 14);
-      case 4: return _mm512_maskz_alignr_epi32(all, v, fill, 12);
-      default: return _mm512_maskz_alignr_epi32(all, v, fill, 8);
-    }
-  };
-  const auto from_right = [all](__m512i v, __m512i fill, int s) {
-    switch (s) {
-      case 1: return _mm512_maskz_alignr_epi32(all, fill, v, 1);
-      case 2: return _mm512_maskz_alignr_epi32(all, fill, v, 2);
-      case 4: return _mm512_maskz_alignr_epi32(all, fill, v, 4);
-      default: return _mm512_maskz_alignr_epi32(all, fill, v, 8);
-    }
-  };
-  const __m512i inf_i = _mm512_castps_si512(inf);
-  const auto prefix_min = [&](__m512 v) {
-    for (int s = 1; s < 16; s *= 2)
-      v = _mm512_maskz_min_ps(all, v, _mm512_castsi512_ps(from_left(_mm512_castps_si512(v), inf_i, s)));
-    return v;
-  };
-  const auto suffix_min = [&](__m512 v) {
-    for (int s = 1; s < 16; s *= 2)
-      v = _mm512_maskz_min_ps(all, v, _mm512_castsi512_ps(from_right(_mm512_castps_si512(v), inf_i, s)));
-    return v;
-  };
-  const __m512 sign = _mm512_set1_ps(-0.0f);
-  // Half areas as Box4::half_area computes them: d = hi - lo, then
-  // d0 * d1 + d1 * d2 + d2 * d0 (no contraction: -ffp-contract=off).
-  const auto half_area = [&](const __m512* lo, const __m512* neg_hi) {
-    __m512 d[3];
-    for (int c = 0; c < 3; ++c) d[c] = _mm512_sub_ps(_mm512_xor_ps(neg_hi[c], sign), lo[c]);
-    return _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(d[0], d[1]), _mm512_mul_ps(d[1], d[2])),
-                         _mm512_mul_ps(d[2], d[0]));
-  };
-  Split best;
-  for (int a = 0; a < 3; ++a) {
-    if (bn.scale_s[a] <= 0.0f) continue;
-    const float* base = reinterpret_cast<const float*>(&bins.bound[a][0]);  // 8 floats per bin
-    const __m512i at = _mm512_slli_epi32(lane, 3);
-    __m512 left_lo[3], left_nhi[3], right_lo[3], right_nhi[3];
-    for (int c = 0; c < 3; ++c) {
-      const __m512 lo = _mm512_mask_i32gather_ps(inf, in_bins, _mm512_add_epi32(at, _mm512_set1_epi32(c)), base, 4);
-      const __m512 nhi =
-          _mm512_mask_i32gather_ps(inf, in_bins, _mm512_add_epi32(at, _mm512_set1_epi32(4 + c)), base, 4);
-      left_lo[c] = prefix_min(lo);
-      left_nhi[c] = prefix_min(nhi);
-      // Right of boundary j + 1 (lane j): bins j + 1 and up.
-      right_lo[c] = _mm512_castsi512_ps(from_right(_mm512_castps_si512(suffix_min(lo)), inf_i, 1));
-      right_nhi[c] = _mm512_castsi512_ps(from_right(_mm512_castps_si512(suffix_min(nhi)), inf_i, 1));
-    }
-    __m512i lc = _mm512_maskz_loadu_epi32(in_bins, bins.count[a]);
-    __m512i rc = lc;
-    for (int s = 1; s < 16; s *= 2) {
-      lc = _mm512_add_epi32(lc, from_left(lc, zero, s));
-      rc = _mm512_add_epi32(rc, from_right(rc, zero, s));
-    }
-    rc = from_right(rc, zero, 1);
-    const __m512 cost =
-        _mm512_add_ps(_mm512_mul_ps(half_area(left_lo, left_nhi), _mm512_maskz_cvtepu32_ps(all, lc)),
-                      _mm512_mul_ps(half_area(right_lo, right_nhi), _mm512_maskz_cvtepu32_ps(all, rc)));
-    const __mmask16 boundary = static_cast<__mmask16>(in_bins >> 1);  // lanes 0 .. nb - 2: boundaries 1 .. nb - 1
-    const __mmask16 valid = boundary & _mm512_cmpneq_epi32_mask(lc, zero) & _mm512_cmpneq_epi32_mask(rc, zero);
-    if (!valid) continue;
-    // The smallest valid cost in every lane (zero-masked forms throughout:
-    // GCC 12 warns on the plain ones' internal undefined operand).
-    __m512 v = _mm512_mask_blend_ps(valid, inf, cost);
-    v = _mm512_maskz_min_ps(all, v, _mm512_maskz_shuffle_f32x4(all, v, v, _MM_SHUFFLE(1, 0, 3, 2)));
-    v = _mm512_maskz_min_ps(all, v, _mm512_maskz_shuffle_f32x4(all, v, v, _MM_SHUFFLE(2, 3, 0, 1)));
-    v = _mm512_maskz_min_ps(all, v, _mm512_maskz_permute_ps(all, v, _MM_SHUFFLE(1, 0, 3, 2)));
-    v = _mm512_maskz_min_ps(all, v, _mm512_maskz_permute_ps(all, v, _MM_SHUFFLE(2, 3, 0, 1)));
-    const float m = _mm512_cvtss_f32(v);
-    if (!(m < best.cost)) continue;
-    const __mmask16 at_min = valid & _mm512_cmp_ps_mask(cost, _mm512_set1_ps(m), _CMP_EQ_OQ);
-    const int j = __builtin_ctz(static_cast<unsigned>(at_min));
-    alignas(64) uint32_t counts[16];
-    _mm512_store_si512(counts, lc);
-    best.axis = a;
-    best.pos = j + 1;
-    best.cost = m;
-    best.left_count = counts[j];
-  }
-  if (best.axis >= 0) {
-    for (int b = 0; b < best.pos; ++b) best.left.extend(bins.box(best.axis, b));
-    for (int b = best.pos; b < nb; ++b) best.right.extend(bins.box(best.axis, b));
-  }
-  return best;
-}
-#endif
-
-// The cheapest bin boundary over the three axes (axis -1 when none splits).
-inline Split find_binned_split(const BinSet& bins, const Binning& bn, int nb) {
-#if defined(__AVX512F__)
-  if (nb <= 16) return find_binned_split_avx512(bins, bn, nb);
-#endif
-  return find_binned_split_scalar(bins, bn, nb);
 }
 
 }  // namespace raylab::sah
