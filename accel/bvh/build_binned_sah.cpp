@@ -287,13 +287,23 @@ class BinnedBuilder {
       // empty, and sweeping them costs more than binning.
       const int nb = bins_for(n, opt_.bins);
       const Binning bn(cbounds, nb);
-      // One bin set per thread, reused: nothing between the binning and the
-      // split search can run another node's build on this thread (no TBB
-      // wait; the parallel binning's reducers have bin sets of their own).
+      // One bin set per thread, reused, for the nodes binned serially:
+      // nothing between their binning and their split search can run another
+      // node's build on this thread. A node binned in parallel waits inside
+      // TBB, where this thread may run another subtree's build: it gets a
+      // bin set of its own (there are few such nodes).
       thread_local std::unique_ptr<BinSet> node_bins;
-      if (!node_bins) node_bins.reset(new BinSet);
-      bin_refs(cur, b, e, bn, nb, *node_bins);
-      const Split s = find_binned_split(*node_bins, bn, nb);
+      std::unique_ptr<BinSet> own_bins;
+      BinSet* bins = nullptr;
+      if (n >= sah::kParallelBinSize) {
+        own_bins.reset(new BinSet);
+        bins = own_bins.get();
+      } else {
+        if (!node_bins) node_bins.reset(new BinSet);
+        bins = node_bins.get();
+      }
+      bin_refs(cur, b, e, bn, nb, *bins);
+      const Split s = find_binned_split(*bins, bn, nb);
       const float area = bounds.half_area();
       const float split_cost =
           opt_.traversal_cost + opt_.intersection_cost * (area > 0.0f ? s.cost / area : 0.0f);
