@@ -132,26 +132,38 @@ class BinnedBuilder {
     out_.nodes.swap(canon);
   }
 
-  // Parallel stable partition of src[b, e) into dst[b, e). With one thread
-  // the same order in one pass: the split's left count (exact, as left_of
-  // matches the bins) places the right side without a counting pass.
+  // Copies src[cb, ce) into dst in order, the references left of the split
+  // from l on and the others from r on, growing the sides' centroid bounds;
+  // returns where the left run ends. The right run never passes e (its start
+  // comes from counts; a disagreement with them throws rather than writes
+  // out of range).
+  static size_t scatter(const BuildRef* src, BuildRef* dst, size_t cb, size_t ce, size_t l, size_t r, size_t e,
+                        const Binning& bn, const Split& s, Box4& lc, Box4& rc) {
+    for (size_t i = cb; i < ce; ++i) {
+      if (bn.left_of(src[i], s.axis, s.pos)) {
+        lc.extend(src[i].centroid());
+        dst[l++] = src[i];
+      } else {
+        if (r == e) throw std::logic_error("bvh: binned partition disagrees with the bins");
+        rc.extend(src[i].centroid());
+        dst[r++] = src[i];
+      }
+    }
+    return l;
+  }
+
+  // Parallel stable partition of src[b, e) into dst[b, e): each chunk's left
+  // references counted, then every chunk scattered to its offsets. With one
+  // thread the same order in one pass: the split's left count (exact, as
+  // left_of matches the bins) places the right side without a counting pass.
   size_t partition_parallel(const BuildRef* src, BuildRef* dst, size_t b, size_t e, const Binning& bn,
                             const Split& s, Box4& lc, Box4& rc) const {
     const size_t n = e - b;
     if (serial_) {
-      size_t l = b, r = b + s.left_count;
-      for (size_t i = b; i < e; ++i) {
-        if (bn.left_of(src[i], s.axis, s.pos)) {
-          lc.extend(src[i].centroid());
-          dst[l++] = src[i];
-        } else {
-          if (r == e) throw std::logic_error("bvh: binned partition disagrees with the bins");
-          rc.extend(src[i].centroid());
-          dst[r++] = src[i];
-        }
-      }
-      if (l != b + s.left_count) throw std::logic_error("bvh: binned partition disagrees with the bins");
-      return l;
+      const size_t mid = b + s.left_count;
+      if (scatter(src, dst, b, e, b, mid, e, bn, s, lc, rc) != mid)
+        throw std::logic_error("bvh: binned partition disagrees with the bins");
+      return mid;
     }
     const size_t chunks = std::min<size_t>(256, (n + 8191) / 8192);
     const size_t chunk = (n + chunks - 1) / chunks;
@@ -176,19 +188,7 @@ class BinnedBuilder {
     }
     tbb::parallel_for(size_t{0}, chunks, [&](size_t c) {
       const size_t cb = b + c * chunk, ce = std::min(e, cb + chunk);
-      size_t l = b + loff[c], r = b + roff[c];
-      Box4 lcb, rcb;
-      for (size_t i = cb; i < ce; ++i) {
-        if (bn.left_of(src[i], s.axis, s.pos)) {
-          lcb.extend(src[i].centroid());
-          dst[l++] = src[i];
-        } else {
-          rcb.extend(src[i].centroid());
-          dst[r++] = src[i];
-        }
-      }
-      lcs[c] = lcb;
-      rcs[c] = rcb;
+      scatter(src, dst, cb, ce, b + loff[c], b + roff[c], e, bn, s, lcs[c], rcs[c]);
     });
     for (size_t c = 0; c < chunks; ++c) {
       lc.extend(lcs[c]);
