@@ -68,6 +68,8 @@ struct BvhConfig {
   int big_min = 1024;         // binned: at nodes of at least this many references
   int opt_rounds = 4;         // reinsertion rounds (work, not time; auto: light 4, reinsert 32)
   double opt_batch = 0.005;   // reinsertion: nodes considered per round, a fraction of all nodes (auto: light 0.005, reinsert 0.15)
+  float thick_limit = 0.0f;   // collapse: thick leaves (collapse_wide.h; auto: 0.4 on bvh16 without opt=reinsert, else off)
+  float thick_area = 0.005f;  // collapse: ... above this fraction of the root box's surface area
   float node_cost = 2.0f;   // collapse: cost of a node visit
   float block_cost = 1.0f;  // collapse: cost of one block test
   TriangleTest tri = TriangleTest::Watertight;
@@ -281,6 +283,9 @@ class BvhAccel final : public Accelerator {
     co.max_leaf_blocks = co.width == 2 ? 1 << 20 : static_cast<int>(wide_ref::kMaxBlocks);
     co.node_cost = cfg_.node_cost;
     co.block_cost = cfg_.block_cost;
+    co.thick_leaf_area = cfg_.thick_area;
+    co.thick_leaf_limit = cfg_.thick_limit;
+    co.mesh = &mesh;
     WideTree wide = collapse_to_wide(tree, co);
     if (cfg_.occlusion_order)
       s.extra["occlusion_root"] = order_children_for_occlusion(wide, mesh, {co.node_cost, co.block_cost, co.block_width});
@@ -493,6 +498,13 @@ AcceleratorInfo bvh_accelerator_info() {
        {"opt_batch", "auto", "reinsertion: nodes considered per round, a fraction of all nodes, the worst by Bittner's "
         "measure (auto: light 0.005, reinsert 0.15)",
         real_in(0, 1, Ends::OpenLow).or_word("auto")},
+       {"thick", "auto", "collapse: a leaf merging several binary leaves is not formed when its box is larger than "
+        "thickarea of the root box's surface area and thicker than this (its volume over that of the cube with the same "
+        "surface area: 1 a cube, 0 flat); such boxes (a floor and a wall together) are entered by every ray starting "
+        "inside them. 0 = off (auto: 0.4 on bvh16 with opt=light or none, else 0)",
+        real_in(0, 1).as_float().or_word("auto")},
+       {"thickarea", "0.005", "collapse: thick leaves (see thick) count from this fraction of the root box's surface area",
+        real_in(0, 1).as_float()},
        {"ct", "2", "collapse SAH cost of a node visit (relative to ci)", real_in(0, kUnbounded, Ends::Open).as_float()},
        {"ci", "1", "collapse SAH cost of a triangle block test (bvh2: of a triangle)", real_in(0, kUnbounded, Ends::Open).as_float()},
        triangle_test_param("; mt: not with simd=0 or packet=16"),
@@ -558,6 +570,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.opt_batch = p.str("opt_batch") == "auto" ? (light ? 0.005 : 0.15) : p.real("opt_batch");
         c.spatial_min = p.integer("smin");
         c.spatial_bins = p.integer("sbins");
+        c.thick_area = static_cast<float>(p.real("thickarea"));
         c.split_planar = p.integer("sflat") == 1;
         c.presplit = static_cast<float>(p.real("presplit"));
         if (c.presplit > 0.0f && c.builder != BuilderKind::Binned)
@@ -596,6 +609,17 @@ AcceleratorInfo bvh_accelerator_info() {
           c.layout = simd::isa_bits() >= 512 && !c.quantized && c.block == 8
                          ? LayoutKind::Bvh16
                          : LayoutKind::Bvh8;
+        // Thick leaves (collapse_wide.h), measured on 16-wide trees after the
+        // light pass: camera rays +4 %, shadow +3 % (Sponza's shadow rays a
+        // third fewer triangle tests, conference's camera rays +15 %). Off
+        // with 8-wide nodes, where an opened leaf costs a level of its own
+        // (Sponza's shadow rays 2.3x the box tests, 0.6x the speed), and with
+        // the full reinsertion, which moves such triangles apart itself (the
+        // limit only adds node tests there: +5 % over the 34 views);
+        // docs/bvh-speed.md, session 30.
+        c.thick_limit = p.str("thick") != "auto" ? static_cast<float>(p.real("thick"))
+                        : c.layout == LayoutKind::Bvh16 && !full ? 0.4f
+                                                                 : 0.0f;
         if (!c.simd && c.packet != 0) throw SpecError("bvh: packet=16 needs simd=1");
         if (!c.simd && c.layout != LayoutKind::Bvh2 && c.block != 8)
           throw SpecError("bvh: simd=0 with a wide layout needs block=8");
@@ -621,7 +645,7 @@ AcceleratorInfo bvh_accelerator_info() {
   info.cover = {"bvh:layout=bvh2", "bvh:layout=bvh4", "bvh:layout=bvh2,tri=mt", "bvh:tri=mt", "bvh:builder=sweep",
                 "bvh:builder=sbvh", "bvh:builder=lbvh,opt=reinsert", "bvh:block=4", "bvh:block=16", "bvh:packet=16",
                 "bvh:bound=sphere", "bvh:bound=sphere,tri=mt", "bvh:simd=0", "bvh:simd=0,layout=bvh4", "bvh:node=q8", "bvh:node=q8,tri=mt",
-                "bvh:layout=bvh16", "bvh:layout=bvh8", "bvh:presplit=0.3"};
+                "bvh:layout=bvh16", "bvh:layout=bvh8", "bvh:presplit=0.3", "bvh:layout=bvh8,thick=0.2,thickarea=0.001"};
   info.describe = [] { return Description{{"isa", simd::isa_name()}}; };
   info.stats = {{"ms_prepare", "ms: triangle boxes and centroids"},
                 {"ms_tree", "ms: the binary tree"},

@@ -3,6 +3,7 @@
 #include "accel/bvh/huge_page_allocator.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -35,6 +36,9 @@ class Collapser {
     choice_ = HugePageBuffer<uint8_t>(tree.nodes.size() * n_);
     inner_split_.assign(tree.nodes.size(), 0);
     slots_.assign(tree.nodes.size(), 1);
+    thick_area_ = opt_.thick_leaf_area > 0.0f && opt_.thick_leaf_limit > 0.0f && opt_.mesh && !tree.nodes.empty()
+                      ? opt_.thick_leaf_area * tree.nodes[0].bounds().half_area()
+                      : kInf;
   }
 
   WideTree run() {
@@ -107,7 +111,36 @@ class Collapser {
     const uint32_t blocks = (c + opt_.block_width - 1) / opt_.block_width;
     if (!forced && (c > static_cast<uint32_t>(opt_.max_leaf) || blocks > static_cast<uint32_t>(opt_.max_leaf_blocks)))
       return kInf;
-    return tree_.nodes[n].bounds().half_area() * opt_.block_cost * static_cast<float>(blocks);
+    const Aabb box = tree_.nodes[n].bounds();
+    const float area = box.half_area();
+    // A binary leaf cannot be opened; larger thick leaves are not formed.
+    if (!forced && area > thick_area_ && box_thickness(box) > opt_.thick_leaf_limit && holds_flat_triangles(n, box))
+      return kInf;
+    return area * opt_.block_cost * static_cast<float>(blocks);
+  }
+
+  // Whether the triangles below n (a leaf candidate: at most max_leaf
+  // references) leave most of n's box empty: their own boxes' volumes sum to
+  // under a quarter of its volume (a floor and walls: zero). Large triangles
+  // of any orientation (a soup) fill their leaves' boxes and are left alone.
+  bool holds_flat_triangles(uint32_t n, const Aabb& box) const {
+    double sum = 0.0;
+    std::array<uint32_t, 64> stack;
+    size_t top = 0;
+    stack[top++] = n;
+    while (top > 0) {
+      const uint32_t x = stack[--top];
+      const Bvh2Node& node = tree_.nodes[x];
+      if (is_leaf(x)) {
+        for (uint32_t k = node.index; k < node.index + node.count; ++k)
+          sum += box_volume(opt_.mesh->triangle_bounds(tree_.prim_ids[k]));
+      } else {
+        if (top + 2 > stack.size()) return false;
+        stack[top++] = node.index;
+        stack[top++] = node.index + 1;
+      }
+    }
+    return 4.0 * sum < box_volume(box);
   }
 
   void solve(uint32_t n) {
@@ -216,6 +249,7 @@ class Collapser {
   CollapseOptions opt_;
   int n_;
   std::vector<uint32_t> counts_;
+  float thick_area_ = kInf;          // half area above which thick merged leaves are not formed
   HugePageBuffer<float> cost_;
   HugePageBuffer<uint8_t> choice_;  // per (node, i): see file comment
   std::vector<uint8_t> inner_split_; // k of D(n, N)
@@ -224,6 +258,19 @@ class Collapser {
 };
 
 }  // namespace
+
+double box_volume(const Aabb& box) {
+  const Vec3f e = (box.hi - box.lo).cwiseMax(0.0f);
+  return static_cast<double>(e.x()) * e.y() * e.z();
+}
+
+float box_thickness(const Aabb& box) {
+  const Vec3f e = (box.hi - box.lo).cwiseMax(0.0f);
+  const double area = static_cast<double>(e.x()) * e.y() + static_cast<double>(e.y()) * e.z() +
+                      static_cast<double>(e.z()) * e.x();
+  if (!(area > 0.0)) return 0.0f;
+  return static_cast<float>(std::sqrt(27.0) * box_volume(box) / (area * std::sqrt(area)));
+}
 
 WideTree collapse_to_wide(const BinaryBvh& tree, const CollapseOptions& options) {
   return Collapser(tree, options).run();

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "accel/bvh/bvh2_node.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 
@@ -28,7 +29,31 @@ struct CollapseOptions {
   int max_leaf_blocks = 15; // hard cap from the child encoding
   float node_cost = 1.0f;   // C_node: cost of visiting one wide node
   float block_cost = 1.0f;  // C_block: cost of testing one block of block_width triangles
+  // Thick leaves: a leaf gathering more than one binary leaf is not formed
+  // when its box is large (surface area above thick_leaf_area of the root
+  // box's) and thick (box_thickness above thick_leaf_limit) although its
+  // triangles are flat (their own boxes' volumes sum to under a quarter of
+  // its volume); the node is opened instead. 0 for either, or no mesh: no
+  // limit. Why: the SAH prices a box by the
+  // chance that a ray from outside crosses it, but camera rays and secondary
+  // rays start inside the scene, and every ray starting inside a box tests
+  // it (Fabianowski, Fowler & Dingliana, "A Cost Metric for Scene-Interior
+  // Ray Origins", EG 2009). A leaf merging flat triangles of different
+  // planes (the floor and a wall of a room, three walls of an alcove) has a
+  // box with volume that none of its triangles' boxes has: the light-pass
+  // trees of the Sponza scenes and conference held such leaves near the
+  // root, entered by up to every camera ray (docs/bvh-speed.md, session 30).
+  float thick_leaf_area = 0.0f;
+  float thick_leaf_limit = 0.0f;
+  const TriangleMesh* mesh = nullptr;  // the triangles the tree's prim_ids name
 };
+
+// A box's volume (0 for an empty box).
+double box_volume(const Aabb& box);
+
+// A box's volume relative to that of the cube with the same surface area:
+// 1 for a cube, 0 for a flat box (3^(3/2) V / A^(3/2), A the half area).
+float box_thickness(const Aabb& box);
 
 inline constexpr int kMaxWideWidth = 16;
 
