@@ -724,16 +724,10 @@ TEST(BvhCollapse, BoxThicknessIsTheVolumeOfTheCubeOfTheSameArea) {
   EXPECT_EQ(box_thickness(Aabb::empty()), 0.0f);
 }
 
-// Three quads of a room's corner (a floor and two walls, two triangles
-// each) beside a cloud of small triangles: without the thick-leaf limit the
-// collapse merges the corner's triangles of different planes into one leaf
-// whose box is a cube (by the SAH it should: one block test over the cube's
-// area against six over the flat boxes' larger total); with it no leaf of
-// more than one binary leaf (one triangle here) is large and thick, and the
-// tree still holds every triangle once.
-TEST(BvhCollapse, ThickLeavesAreNotFormed) {
-  test::NamedMesh s = test::soup(400, 47);
-  TriangleMesh& m = s.mesh;
+// A room's corner in [0, 4]^3 (the floor and two walls, each one quad of
+// two triangles) beside a cloud of 400 small triangles in [6, 7]^3.
+TriangleMesh room_corner_beside_a_cloud() {
+  TriangleMesh m = test::soup(400, 47).mesh;
   for (Vec3f& v : m.vertices) v = v + Vec3f(6, 6, 6);
   const auto quad = [&](Vec3f o, Vec3f u, Vec3f w) {
     const auto base = static_cast<uint32_t>(m.vertices.size());
@@ -744,6 +738,17 @@ TEST(BvhCollapse, ThickLeavesAreNotFormed) {
   quad(Vec3f(0, 0, 0), Vec3f(4, 0, 0), Vec3f(0, 0, 4));  // floor
   quad(Vec3f(0, 0, 0), Vec3f(0, 4, 0), Vec3f(0, 0, 4));  // wall x = 0
   quad(Vec3f(0, 0, 0), Vec3f(4, 0, 0), Vec3f(0, 4, 0));  // wall z = 0
+  return m;
+}
+
+// The room corner beside its cloud: without the thick-leaf limit the
+// collapse merges the corner's triangles of different planes into one leaf
+// whose box is a cube (by the SAH it should: one block test over the cube's
+// area against six over the flat boxes' larger total); with it no leaf of
+// more than one binary leaf (one triangle here) is large and thick, and the
+// tree still holds every triangle once.
+TEST(BvhCollapse, ThickLeavesAreNotFormed) {
+  const TriangleMesh m = room_corner_beside_a_cloud();
   const BinaryBvh tree = build_with("binned", m, 1);
   const float root_area = tree.nodes[0].bounds().half_area();
   for (int width : {8, 16}) {
@@ -800,18 +805,7 @@ TEST(BvhCollapse, ThickLeavesAreNotFormed) {
 // corner's large triangles being axis-planar, so that a large thick leaf box
 // holds more than one of them.
 TEST(BvhCollapse, ThickLeafLimitByDefaultOnSixteenWideLightPassTrees) {
-  test::NamedMesh s = test::soup(400, 47);
-  TriangleMesh& m = s.mesh;
-  for (Vec3f& v : m.vertices) v = v + Vec3f(6, 6, 6);
-  const auto quad = [&](Vec3f o, Vec3f u, Vec3f w) {
-    const auto base = static_cast<uint32_t>(m.vertices.size());
-    m.vertices.insert(m.vertices.end(), {o, o + u, o + u + w, o + w});
-    m.triangles.push_back({base, base + 1, base + 2});
-    m.triangles.push_back({base, base + 2, base + 3});
-  };
-  quad(Vec3f(0, 0, 0), Vec3f(4, 0, 0), Vec3f(0, 0, 4));
-  quad(Vec3f(0, 0, 0), Vec3f(0, 4, 0), Vec3f(0, 0, 4));
-  quad(Vec3f(0, 0, 0), Vec3f(4, 0, 0), Vec3f(0, 4, 0));
+  const TriangleMesh m = room_corner_beside_a_cloud();
   const auto thick_leaves = [&](const std::string& spec) {
     auto accel = make_accelerator(spec);
     accel->build(m);

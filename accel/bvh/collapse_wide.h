@@ -34,11 +34,11 @@ struct CollapseOptions {
   // box's) and thick (box_thickness above thick_leaf_limit) although its
   // triangles are flat (their own boxes' volumes sum to under a quarter of
   // its volume); the node is opened instead. 0 for either, or no mesh: no
-  // limit. Why: the SAH prices a box by the
-  // chance that a ray from outside crosses it, but camera rays and secondary
-  // rays start inside the scene, and every ray starting inside a box tests
-  // it (Fabianowski, Fowler & Dingliana, "A Cost Metric for Scene-Interior
-  // Ray Origins", EG 2009). A leaf merging flat triangles of different
+  // limit. Why: the SAH prices a box by the chance that a ray from outside
+  // crosses it, but camera rays and secondary rays start inside the scene,
+  // and every ray starting inside a box tests it (Fabianowski, Fowler &
+  // Dingliana, "A Cost Metric for Scene-Interior Ray Origins", EG 2009).
+  // A leaf merging flat triangles of different
   // planes (the floor and a wall of a room, three walls of an alcove) has a
   // box with volume that none of its triangles' boxes has: the light-pass
   // trees of the Sponza scenes and conference held such leaves near the
