@@ -20,7 +20,8 @@ test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
 demo: build
-	./$(BUILD)/raylab render --scene cornell --accel bvh --spp 64 --size 512x512 --out out/cornell.png
+	mkdir -p out
+	./$(BUILD)/raylab render --scene cornell --accel bvh --spp 64 --size 512x512 -o out/cornell.png
 	./$(BUILD)/raylab bench --scene cornell --accel all --ray-sets primary,random --quiet
 
 # The benchmark study (workflow/Snakefile, configured by workflow/config.yaml): one job per

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -24,9 +25,11 @@ bool parse_positive(const std::string& s, int& v) {
 std::pair<int, int> parse_size(const std::string& text) {
   const auto x = text.find('x');
   int w = 0, h = 0;
-  if (x == std::string::npos || !parse_positive(text.substr(0, x), w) || !parse_positive(text.substr(x + 1), h) ||
-      w > 65536 || h > 65536)
+  if (x == std::string::npos || !parse_positive(text.substr(0, x), w) || !parse_positive(text.substr(x + 1), h))
     throw std::invalid_argument(fmt::format("invalid size '{}' (expected WIDTHxHEIGHT, e.g. 512x512)", text));
+  if (w > kMaxImageSide || h > kMaxImageSide)
+    throw std::invalid_argument(
+        fmt::format("size '{}' is too large: width and height are at most {}", text, kMaxImageSide));
   return {w, h};
 }
 
@@ -70,6 +73,34 @@ std::string ray_set_size_note(const std::string& set, size_t asked, size_t got) 
   const bool secondary = set == "diffuse" || set == "shadow";
   return fmt::format("note: ray set '{}' holds {} rays, not {}{}\n", set, got, asked,
                      secondary ? " (its rays start from primary hits; primary rays that miss give none)" : "");
+}
+
+void check_output_path(const std::string& path, const std::string& option) {
+  namespace fs = std::filesystem;
+  if (path.empty()) throw std::invalid_argument(fmt::format("{}: empty file name", option));
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw std::invalid_argument(fmt::format("{} {}: is a directory (give a file name)", option, path));
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty() && !fs::is_directory(parent, ec))
+    throw std::invalid_argument(fmt::format("{} {}: directory {} does not exist (create it first)", option, path,
+                                            parent.string()));
+}
+
+CLI::Option* add_accel_list_option(CLI::App* cmd, std::string& accel) {
+  return cmd->add_option("--accel", accel,
+                         "accelerator specs separated by ';' (',' also works between specs without parameters), or "
+                         "'all' (see raylab accels)")
+      ->capture_default_str();
+}
+
+void add_renamed_option(CLI::App* cmd, const std::string& old_name, const std::string& new_name) {
+  cmd->add_option_function<std::string>(old_name,
+                                        [old_name, new_name](const std::string&) {
+                                          throw CLI::ValidationError(
+                                              fmt::format("{} was renamed: use {}", old_name, new_name));
+                                        })
+      ->group("");  // not in --help: it exists only to say where the option went
 }
 
 void add_scene_options(CLI::App* cmd, std::string& positional, std::string& option, const std::string& help) {

@@ -83,10 +83,10 @@ std::string csv_path_for(const std::string& json) {
 }
 
 struct BenchCli {
-  std::string accel = "embree,bvh", ray_sets = "primary,random", threads, size = "512x512", json, csv, preset, ray_file;
+  std::string accel = "embree;bvh", ray_sets = "primary,random", threads, size = "512x512", out, csv, preset, ray_file;
   std::vector<std::string> scenes, positional_scenes, scales, sweeps;
   size_t random_rays = 262144, brute_max_tris = 0;
-  double memory_headroom = 0.95;
+  double memory_headroom = 0.95, min_time = kDefaultMinTimeS;
   int repeats = 5, build_repeats = 1;
   uint64_t seed = 1;
   bool quiet = false, selfcheck = false;
@@ -152,13 +152,13 @@ int run_embree_selfcheck(const BenchCli& o, const std::vector<std::string>& scen
   std::printf("embree self-check: adapter (as raylab bench times it) vs direct rtcIntersect1/rtcOccluded1 loop, "
               "Mrays/s, 1 thread, median of %d\n%s",
               o.repeats, format_selfcheck_table(rows).c_str());
-  if (!o.json.empty()) {
+  if (!o.out.empty()) {
     nlohmann::json recs = nlohmann::json::array();
     for (const auto& r : rows)
       recs.push_back({{"scene", r.scene}, {"ray_set", r.ray_set}, {"rays", r.rays},
                       {"adapter_mrays_per_s", r.adapter_mrays_per_s}, {"direct_mrays_per_s", r.direct_mrays_per_s},
-                      {"ratio", r.ratio}, {"identical", r.identical}, {"prepare_ms", r.prepare_ms}});
-    write_json_report(o.json, report_header("bench --embree-selfcheck"), recs);
+                      {"ratio_adapter_to_direct", r.ratio}, {"identical", r.identical}, {"prepare_ms", r.prepare_ms}});
+    write_json_report(o.out, report_header("bench --embree-selfcheck"), recs);
   }
   bool identical = true;
   for (const auto& r : rows) identical &= r.identical;
@@ -181,14 +181,19 @@ Runner add_bench(CLI::App& app) {
   cmd->add_option("--preset", o->preset,
                   "quick or full: defaults for the options not given (run from the checkout, the scenes include the "
                   "interior views of scenes/shared when ../shared/scenes is present)");
-  cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
+  add_accel_list_option(cmd, o->accel);
   cmd->add_option("--ray-sets", o->ray_sets, "ray sets, comma separated: primary, diffuse, shadow, random")
       ->capture_default_str();
   cmd->add_option("-t,--threads", o->threads, "thread counts, comma separated, 0 = all cores (default: 1 and all cores)");
   cmd->add_option("--size", o->size, "primary rays: image size WIDTHxHEIGHT")->capture_default_str();
   add_ray_count_option(cmd, o->random_rays, "rays per generated set (random; primary rays are one per pixel of --size)",
-                       "--rays,--random-rays");
+                       "--rays");
   cmd->add_option("--repeats", o->repeats, "timed trace repeats (median, min and max reported)")->capture_default_str()->check(CLI::Range(1, 1000));
+  cmd->add_option("--min-time", o->min_time,
+                  "seconds each timed repeat lasts at least: the set is traced as many times as that takes (as Google "
+                  "Benchmark's --benchmark_min_time); 0 = one trace per repeat")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 60.0));
   cmd->add_option("--build-repeats", o->build_repeats, "builds per accelerator (median reported)")->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_option("--brute-max-tris", o->brute_max_tris, "skip brute on scenes with more triangles (0 = never skip)")->capture_default_str();
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
@@ -197,8 +202,10 @@ Runner add_bench(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--sweep", o->sweeps, "PARAM=v1,v2,...: one run per value for every accelerator with PARAM (repeatable)");
-  cmd->add_option("-o,--json", o->json, "write records to this JSON file (rewritten after every cell)");
-  cmd->add_option("--csv", o->csv, "write records to this CSV file (default: next to --json, .csv)");
+  cmd->add_option("-o,--out", o->out, "the JSON report (rewritten after every cell; complete false until the run ends)");
+  cmd->add_option("--csv", o->csv, "the records as CSV (default: next to the JSON report, .csv)");
+  add_renamed_option(cmd, "--json", "-o/--out FILE");
+  add_renamed_option(cmd, "--random-rays", "--rays N");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
   cmd->add_option("--ray-file", o->ray_file,
                   "trace the rays of this ray file (raylab rays, docs/ray-file.md) instead of --ray-sets; needs one scene");
@@ -219,6 +226,7 @@ BenchOptions bench_options_of(const BenchCli& o, const std::vector<RaySet>& file
   std::tie(bo.width, bo.height) = parse_size(o.size);
   bo.random_rays = o.random_rays;
   bo.repeats = o.repeats;
+  bo.min_time_s = o.min_time;
   bo.build_repeats = o.build_repeats;
   bo.brute_max_triangles = o.brute_max_tris;
   bo.seed = o.seed;
@@ -235,7 +243,8 @@ nlohmann::json bench_report_header(const BenchCli& o, const std::vector<std::str
   header["preset"] = o.preset.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.preset);
   header["options"] = {{"scenes", scene_specs},     {"accels", specs},         {"ray_sets", bo.ray_sets},
                        {"threads", bo.threads},     {"size", o.size},         {"random_rays", bo.random_rays},
-                       {"repeats", bo.repeats},     {"build_repeats", bo.build_repeats},
+                       {"repeats", bo.repeats},     {"min_time_s", bo.min_time_s},
+                       {"build_repeats", bo.build_repeats},
                        {"brute_max_tris", bo.brute_max_triangles}, {"seed", bo.seed},
                        {"ray_file", o.ray_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.ray_file)}};
   return header;
@@ -325,7 +334,9 @@ void bench_scene(const std::string& spec, const std::vector<std::string>& specs,
   std::printf("bench %s (%zu triangles)\n%s", scene.name.c_str(), scene.num_triangles(),
               format_bench_table(records).c_str());
   std::printf("%s", format_build_summary(records).c_str());
+  std::printf("%s", format_embree_noise(embree_noise(records)).c_str());
   std::fflush(stdout);
+  std::fputs(bench_short_repeat_warning(records).c_str(), stderr);
 }
 
 int run_bench_command(BenchCli& o, const CLI::App& cmd) {
@@ -340,12 +351,14 @@ int run_bench_command(BenchCli& o, const CLI::App& cmd) {
     file_sets.push_back(read_ray_file(o.ray_file).set);
   }
 
+  if (!o.out.empty()) check_output_path(o.out);
+  if (!o.csv.empty()) check_output_path(o.csv, "--csv");
   if (o.selfcheck) return run_embree_selfcheck(o, scene_specs, file_sets);
 
   BenchOptions bo = bench_options_of(o, file_sets);
   BenchOutput out;
-  out.json_path = o.json;
-  out.csv_path = !o.csv.empty() ? o.csv : (o.json.empty() ? std::string() : csv_path_for(o.json));
+  out.json_path = o.out;
+  out.csv_path = !o.csv.empty() ? o.csv : (o.out.empty() ? std::string() : csv_path_for(o.out));
   out.header = bench_report_header(o, scene_specs, specs, bo);
 
   InterruptGuard interrupt;  // Ctrl-C: finish the current cell, keep the records
@@ -360,7 +373,7 @@ int run_bench_command(BenchCli& o, const CLI::App& cmd) {
   out.save(!interrupted);
   if (interrupted) {
     std::fprintf(stderr, "raylab: bench interrupted: %zu finished records kept%s%s\n", out.records.size(),
-                 o.json.empty() ? "" : " in ", o.json.c_str());
+                 o.out.empty() ? "" : " in ", o.out.c_str());
     return kExitInterrupted;
   }
   return 0;

@@ -24,22 +24,29 @@ Runner add_rays(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("rays", "write a ray set (as raylab bench makes it) to a ray file");
-  // The vocabulary of verify and bench (issue 19): a positional scene,
-  // --ray-sets for which set, --rays for how many, -o for the output; the
-  // first names (--set, --count, --out) are kept as synonyms.
+  // The vocabulary of verify and bench: a positional scene, --ray-sets for
+  // which set, --rays for how many, -o for the output.
   add_scene_options(cmd, o->positional_scene, o->scene, "the scene: procedural spec, scene file or mesh file");
-  cmd->add_option("--ray-sets,--set", o->set, "the ray set: primary, diffuse, shadow or random (one)")->required();
+  cmd->add_option("--ray-sets", o->set,
+                  "the ray set: primary, diffuse, shadow or random (one: a ray file holds one set, docs/ray-file.md)")
+      ->required();
   cmd->add_option("--size", o->size, "primary rays (and the diffuse/shadow rays from their hits): image size WIDTHxHEIGHT")
       ->capture_default_str();
-  add_ray_count_option(cmd, o->count, "random rays: how many", "--rays,--count");
+  add_ray_count_option(cmd, o->count, "random rays: how many");
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   cmd->add_flag("--hits", o->hits, "append the reference's answers (single-ray Embree): hits, or occlusion for shadow rays");
-  cmd->add_option("-o,--out", o->out, "ray file to write (docs/ray-file.md)")->required();
+  cmd->add_option("-o,--out", o->out, "ray file to write (docs/ray-file.md); its directory must exist")->required();
+  add_renamed_option(cmd, "--set", "--ray-sets NAME");
+  add_renamed_option(cmd, "--count", "--rays N");
 
   return [o]() {
     if (o->set.find(',') != std::string::npos)
-      throw std::invalid_argument(fmt::format("rays writes one ray set per file, '{}' names several", o->set));
+      throw std::invalid_argument(fmt::format(
+          "--ray-sets {}: a ray file holds one ray set (its header names one set and one query kind, "
+          "docs/ray-file.md); write one file per set",
+          o->set));
     check_ray_set_names({o->set});
+    check_output_path(o->out);
     RaySetOptions rso;
     std::tie(rso.width, rso.height) = parse_size(o->size);
     rso.random_count = o->count;

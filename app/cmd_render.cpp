@@ -10,6 +10,7 @@
 #include "app/cmd_render_aov.h"
 #include "base/timer.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "bench/report.h"
 #include "scenes/scene_registry.h"
 #include "tracer/integrator.h"
@@ -35,36 +36,60 @@ std::string default_output_name(const std::string& scene_arg) {
   return "out/" + (out.empty() ? std::string("render") : out) + ".png";
 }
 
+// The output image: -o as given (its directory must exist), or the default
+// out/<name><suffix>.png.
+std::string output_image_path(const std::string& given, const std::string& scene_arg, const std::string& suffix) {
+  if (!given.empty()) {
+    check_output_path(given);
+    return given;
+  }
+  std::string path = default_output_name(scene_arg);
+  path.insert(path.size() - 4, suffix);
+  return path;
+}
+
 struct RenderOpts {
-  std::string scene, positional_scene, accel = "bvh", size, out, json, camera, up, background, aov;
+  std::string scene, positional_scene, accel = "bvh", size, out, timings, camera, up, background, aov, aov_scale = "auto";
   int spp = 64, threads = 0, max_depth = 64;
   uint64_t seed = 1;
   bool quiet = false;
 };
 
+// Without -o the image goes to out/, created when missing (the one directory
+// render makes, as documented), once the scene has loaded.
+void make_default_output_directory(const RenderOpts& o, const std::string& path) {
+  if (!o.out.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directory(std::filesystem::path(path).parent_path(), ec);
+  check_output_path(path);
+}
+
 // --aov: a per-pixel cost picture of each accelerator instead of a rendering.
 int run_cost_aov(const RenderOpts& o, const std::vector<std::string>& accels) {
   check_aov_kind(o.aov);
+  check_aov_scale(o.aov_scale);
   AovOptions aov;
   aov.kind = o.aov;
+  aov.scale = o.aov_scale;
   aov.accels = accels;
   const std::string scene_arg = pick_scene("render", o.scene, o.positional_scene, "cornell");
-  aov.out = o.out;
-  if (aov.out.empty()) {
-    aov.out = default_output_name(scene_arg);
-    aov.out.insert(aov.out.size() - 4, "_" + o.aov);
+  {
+    const std::string ext = lower_extension_of(o.out);
+    if (!o.out.empty() && ext != ".png" && ext != ".pfm")
+      throw std::invalid_argument(fmt::format("-o {}: --aov writes a .png (with the raw .pfm next to it) or a .pfm", o.out));
   }
-  const std::string ext = lower_extension_of(aov.out);
-  if (ext != ".png" && ext != ".pfm")
-    throw std::invalid_argument(fmt::format("--out {}: --aov writes a .png (with the raw .pfm next to it) or a .pfm", aov.out));
   if (!o.size.empty()) std::tie(aov.width, aov.height) = parse_size(o.size);
   if (!o.camera.empty()) {
     View probe;
     apply_camera_option(o.camera, probe);
   }
+  aov.out = output_image_path(o.out, scene_arg, "_" + o.aov);
   Scene scene = load_scene(scene_arg);
   if (!o.up.empty()) apply_up_axis(o.up, scene);
   if (!o.camera.empty()) apply_camera_option(o.camera, scene.view);
+  make_default_output_directory(o, aov.out);
+  InterruptGuard interrupt;  // Ctrl-C: stop within a block of pixels, write nothing, exit 130
+  aov.stop = interrupt.flag();
   return render_cost_aov(scene, aov);
 }
 
@@ -76,12 +101,12 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
         o.accel, accels.size(), fmt::join(accels, " ")));
   auto accel = make_accelerator(accels.front());
   const std::string scene_arg = pick_scene("render", o.scene, o.positional_scene, "cornell");
-  std::string out = o.out.empty() ? default_output_name(scene_arg) : o.out;
   {
-    const std::string ext = lower_extension_of(out);
-    if (ext != ".png" && ext != ".pfm" && ext != ".exr")
-      throw std::invalid_argument(fmt::format("--out {}: use a .png, .exr or .pfm file name", out));
+    const std::string ext = lower_extension_of(o.out);
+    if (!o.out.empty() && ext != ".png" && ext != ".pfm" && ext != ".exr")
+      throw std::invalid_argument(fmt::format("-o {}: use a .png, .exr or .pfm file name", o.out));
   }
+  if (!o.timings.empty()) check_output_path(o.timings, "--timings");
   std::pair<int, int> size{0, 0};
   if (!o.size.empty()) size = parse_size(o.size);
   const Vec3f background = o.background.empty() ? Vec3f::Zero() : parse_background(o.background);
@@ -90,6 +115,7 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
     apply_camera_option(o.camera, probe);  // syntax errors before the load
   }
 
+  const std::string out = output_image_path(o.out, scene_arg, "");
   Timer load;
   Scene scene = load_scene(scene_arg);
   const double load_ms = load.ms();
@@ -105,16 +131,24 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
   rs.seed = o.seed;
   rs.max_depth = o.max_depth;
   rs.progress = !o.quiet && stderr_is_terminal();
+  InterruptGuard interrupt;  // Ctrl-C: stop within a batch of paths, write nothing, exit 130
+  rs.stop = interrupt.flag();
   Timer wall;
   const BuildStats bs = accel->build(scene.mesh);
   const RenderResult r = render(scene, *accel, rs);
   const double wall_s = wall.seconds();
+  if (!r.complete || interrupt.interrupted()) {
+    // A partial image would pass for a finished one: none is written.
+    std::fprintf(stderr, "raylab render: interrupted after %.1f s: no image written\n", wall_s);
+    return kExitInterrupted;
+  }
+  make_default_output_directory(o, out);
   write_image(r.image, out);
   const double mrays = (r.rays + r.shadow_rays) / std::max(r.seconds, 1e-9) * 1e-6;
   std::printf("%s: %zu triangle%s (loaded in %.1f ms), %s built in %.1f ms, %dx%d at %d spp in %.2f s (%.2f Mrays/s) -> %s\n",
               scene.name.c_str(), scene.num_triangles(), scene.num_triangles() == 1 ? "" : "s", load_ms,
               accel->spec().c_str(), bs.build_ms, rs.width, rs.height, rs.spp, r.seconds, mrays, out.c_str());
-  if (!o.json.empty()) {
+  if (!o.timings.empty()) {
     const nlohmann::json rec = {{"scene", scene.name},
                                 {"triangles", scene.num_triangles()},
                                 {"accel", accel->spec()},
@@ -129,7 +163,7 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
                                 {"shadow_rays", r.shadow_rays},
                                 {"mrays_per_s", mrays},
                                 {"image", out}};
-    write_json_report(o.json, report_header("render"), nlohmann::json::array({rec}));
+    write_json_report(o.timings, report_header("render"), nlohmann::json::array({rec}));
   }
   return 0;
 }
@@ -145,8 +179,8 @@ Runner add_render(CLI::App& app) {
   cmd->add_option("-s,--spp", o->spp, "samples per pixel")->capture_default_str()->check(CLI::Range(1, 1 << 20));
   cmd->add_option("--size", o->size, "image size WIDTHxHEIGHT (default: the scene's view)");
   cmd->add_option("-o,--out", o->out,
-                  "output image: .png (8-bit sRGB), .exr (linear half float) or .pfm (linear float); "
-                  "default out/<scene name>.png");
+                  "output image: .png (8-bit sRGB), .exr (linear 32-bit float) or .pfm (linear 32-bit float); "
+                  "its directory must exist; default out/<scene name>.png (out/ is created)");
   cmd->add_option("--camera", o->camera,
                   "camera override, any of from=x,y,z,at=x,y,z,up=x,y,z,fov=deg (e.g. --camera from=0,1,4,at=0,0.5,0)");
   cmd->add_option("--up", o->up, "the up axis of a mesh file: x, y, z, -x, -y, -z (Z-up files: --up z); re-frames the camera");
@@ -154,11 +188,17 @@ Runner add_render(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   add_threads_option(cmd, o->threads);
   cmd->add_option("--max-depth", o->max_depth, "maximum path length")->capture_default_str()->check(CLI::Range(1, 1024));
-  cmd->add_option("--json", o->json, "also write the timings (build, render, wall time) to this JSON file");
+  cmd->add_option("--timings", o->timings, "also write the timings (build, render, wall time) as a JSON record to this file");
+  add_renamed_option(cmd, "--json", "--timings FILE");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
   cmd->add_option("--aov", o->aov,
                   "per-pixel cost picture instead of a rendering: nodes, tris or time per primary ray "
-                  "(PNG with colour bar + raw PFM; with several --accel, one contact sheet on a shared scale)");
+                  "(PNG with colour bar + raw PFM; with several --accel, one contact sheet)");
+  cmd->add_option("--aov-scale", o->aov_scale,
+                  "colours of --aov: auto (a sheet: one log scale for all tiles; one picture: linear unless its values "
+                  "span orders of magnitude), log or linear (one scale for all tiles), each (each tile its own linear "
+                  "scale)")
+      ->capture_default_str();
 
   return [o]() {
     std::unique_ptr<tbb::global_control> limit;
@@ -166,6 +206,8 @@ Runner add_render(CLI::App& app) {
       limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
     // Check every argument before loading a possibly large scene.
     const auto accels = expand_accelerator_list(o->accel);
+    if (o->aov.empty() && o->aov_scale != "auto")
+      throw std::invalid_argument("--aov-scale applies to --aov pictures only");
     return o->aov.empty() ? run_render(*o, accels) : run_cost_aov(*o, accels);
   };
 }

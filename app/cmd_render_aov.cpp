@@ -14,6 +14,7 @@
 
 #include "accel/registry.h"
 #include "app/cmd_show_draw.h"
+#include "app/commands.h"
 #include "tracer/ray_sets.h"
 
 namespace raylab::cli {
@@ -28,9 +29,11 @@ const char* aov_label(const std::string& kind) {
 
 // Per-pixel cost of one built structure; empty when the structure cannot
 // count (Embree has no per-ray counters).
-std::vector<float> pixel_costs(const Accelerator& accel, const RaySet& primary, const std::string& kind, int repeats) {
+std::vector<float> pixel_costs(const Accelerator& accel, const RaySet& primary, const std::string& kind, int repeats,
+                               const std::atomic<bool>* stop) {
   std::vector<float> cost(primary.rays.size(), 0.0f);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, cost.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    if (stop && stop->load(std::memory_order_relaxed)) return;
     for (size_t i = r.begin(); i < r.end(); ++i) {
       const std::span<const Ray> ray(&primary.rays[i], 1);
       Hit hit;
@@ -79,6 +82,11 @@ void check_aov_kind(const std::string& kind) {
     throw std::invalid_argument(fmt::format("--aov {}: use nodes, tris or time", kind));
 }
 
+void check_aov_scale(const std::string& scale) {
+  if (scale != "auto" && scale != "log" && scale != "linear" && scale != "each")
+    throw std::invalid_argument(fmt::format("--aov-scale {}: use auto, log, linear or each", scale));
+}
+
 int render_cost_aov(const Scene& scene, const AovOptions& o) {
   check_aov_kind(o.kind);
   const int w = o.width > 0 ? o.width : scene.view.width;
@@ -91,12 +99,15 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
     std::vector<float> cost;  // empty: no counters
   };
   std::vector<Result> results;
+  auto stopped = [&] { return o.stop && o.stop->load(); };
   for (const auto& spec : o.accels) {
+    if (stopped()) break;
     auto accel = make_accelerator(spec);
     const bool counts = accelerator_info(Spec::parse(spec).name).caps.per_ray_counters;
     accel->build(scene.mesh);
     Result r{accel->spec(), {}};
-    if (o.kind == "time" || counts) r.cost = pixel_costs(*accel, primary, o.kind, o.time_repeats);
+    if (o.kind == "time" || counts) r.cost = pixel_costs(*accel, primary, o.kind, o.time_repeats, o.stop);
+    if (stopped()) break;
     if (r.cost.empty()) {
       std::printf("%s: %s has no per-ray counters (no %s picture)\n", scene.name.c_str(), r.spec.c_str(), o.kind.c_str());
     } else {
@@ -105,6 +116,10 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
                   mean_of(r.cost), max);
     }
     results.push_back(std::move(r));
+  }
+  if (stopped()) {
+    std::fprintf(stderr, "raylab render: interrupted: no picture written\n");
+    return kExitInterrupted;
   }
   const bool sheet = results.size() > 1;
   // Raw values: <out>.pfm for one structure, <stem>.<spec>.pfm for a sheet.
@@ -118,21 +133,31 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
     write_raw(r.cost, w, h, raw.string());
   }
   if (!png) return 0;
-  const CostScale scale = fit_cost_scale(all);  // one scale for every tile
+  // One scale for every tile (comparable colours), unless each tile gets its own.
+  const bool each = o.scale == "each";
+  const ScaleKind kind = o.scale == "log" || (o.scale == "auto" && sheet) ? ScaleKind::Log
+                         : o.scale == "auto"                              ? ScaleKind::Auto
+                                                                          : ScaleKind::Linear;
+  const CostScale shared = fit_cost_scale(all, kind);
+  std::string label = aov_label(o.kind);
+  if (sheet) label += each ? ", each tile its own scale" : ", one scale for all tiles";
+  int title_rows = 0;
+  for (const auto& r : results)
+    title_rows = std::max(title_rows, static_cast<int>(wrap_text(r.spec, w - 12, label_size_for(w)).size()));
   std::vector<Image> tiles;
   for (const auto& r : results) {
-    if (!r.cost.empty()) {
-      tiles.push_back(cost_picture(r.cost, w, h, scale, aov_label(o.kind), sheet ? r.spec : std::string()));
-    } else {
-      Image blank = cost_picture(std::vector<float>(static_cast<size_t>(w) * h, 0.0f), w, h, scale, aov_label(o.kind),
-                                 r.spec);
-      draw_text(blank, 4, h / 2, "no per-ray counters", Vec3f::Ones(), w >= 400 ? 2 : 1);
-      tiles.push_back(std::move(blank));
-    }
+    const std::string title = sheet ? r.spec : std::string();
+    // A structure without counters gets a grey tile saying so (empty values), not a black one that reads as "no work".
+    const CostScale scale = each && !r.cost.empty() ? fit_cost_scale(r.cost, ScaleKind::Linear) : shared;
+    tiles.push_back(cost_picture(r.cost, w, h, scale, label, title, sheet ? title_rows : 0));
   }
   const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(tiles.size()))));
   write_image(sheet ? contact_sheet(tiles, columns) : tiles.front(), o.out);
-  std::printf("-> %s\n", o.out.c_str());
+  std::printf("-> %s (colours: %s)\n", o.out.c_str(),
+              each ? "each tile its own linear scale"
+                   : fmt::format("{}{} scale, 0 to {:.4g}", sheet ? "one " : "", shared.log ? "log" : "linear",
+                                 shared.hi)
+                         .c_str());
   return 0;
 }
 

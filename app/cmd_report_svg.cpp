@@ -35,29 +35,13 @@ std::string short_number(double v) {
 
 namespace {
 
-// Tick values for [lo, hi]: powers of ten, plus 2 and 5 times them when the
-// range spans fewer than three decades (so a log axis always has several
-// labelled ticks); a linear axis gets about six round steps.
-std::vector<double> ticks_for(double lo, double hi, bool log) {
+// About six round linear steps over [0, hi].
+std::vector<double> ticks_for(double hi) {
   std::vector<double> t;
-  if (log) {
-    // Within about a decade, 1-2-5 gives too few labels: round linear steps instead.
-    if (hi / lo < 12.0) return ticks_for(lo, hi, false);
-    const int a = static_cast<int>(std::floor(std::log10(lo))), b = static_cast<int>(std::ceil(std::log10(hi)));
-    const bool fine = b - a <= 3;
-    for (int e = a; e <= b; ++e)
-      for (double m : fine ? std::vector<double>{1, 2, 5} : std::vector<double>{1}) {
-        const double v = m * std::pow(10.0, e);
-        if (v >= lo * 0.999 && v <= hi * 1.001) t.push_back(v);
-      }
-    return t;
-  }
-  const double span = hi - lo;
-  const double raw = span / 6.0;
+  const double raw = hi / 6.0;
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
   const double step = raw / mag < 2 ? 2 * mag : raw / mag < 5 ? 5 * mag : 10 * mag;
-  for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step)
-    if (v > 0 || lo <= 0) t.push_back(v);
+  for (double v = 0; v <= hi * (1 + 1e-9); v += step) t.push_back(v);
   return t;
 }
 
@@ -67,34 +51,18 @@ std::string svg_bar_chart(const BarChart& c) {
   const int label_w = 190, note_w = 170, plot_w = 420, row_h = 20, top = 34, bottom = 44;
   const int width = label_w + plot_w + note_w;
   const int height = top + static_cast<int>(c.rows.size()) * row_h + bottom;
-  // Domain from every finite value, whisker and the reference.
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  // The axis runs from 0 to past the largest value, whisker and the reference.
+  double hi = 0;
   auto take = [&](double v) {
-    if (std::isfinite(v) && (!c.log_x || v > 0)) {
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
+    if (std::isfinite(v)) hi = std::max(hi, v);
   };
   for (const auto& r : c.rows) {
     take(r.value);
-    take(r.lo);
     take(r.hi);
   }
   take(c.reference);
-  if (!std::isfinite(lo)) lo = c.log_x ? 0.1 : 0.0, hi = 1.0;
-  if (c.log_x) {
-    lo = std::pow(10.0, std::floor(std::log10(lo) * 4) / 4);  // round out to quarter decades
-    hi = std::pow(10.0, std::ceil(std::log10(hi) * 4) / 4);
-    if (hi <= lo) hi = lo * 10;
-  } else {
-    lo = std::min(lo, 0.0);
-    hi = hi > lo ? hi * 1.08 : lo + 1;
-  }
-  auto x_of = [&](double v) {
-    const double t = c.log_x ? (std::log10(v) - std::log10(lo)) / (std::log10(hi) - std::log10(lo)) : (v - lo) / (hi - lo);
-    return label_w + std::clamp(t, 0.0, 1.0) * plot_w;
-  };
-  const double base = std::isfinite(c.reference) && c.reference > 0 ? c.reference : (c.log_x ? lo : std::max(lo, 0.0));
+  hi = hi > 0 ? hi * 1.05 : 1.0;
+  auto x_of = [&](double v) { return label_w + std::clamp(v / hi, 0.0, 1.0) * plot_w; };
   std::string s = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" id=\"{}\" class=\"chart\" width=\"{}\" height=\"{}\" "
       "viewBox=\"0 0 {} {}\" font-family=\"sans-serif\" font-size=\"11\" role=\"img\" aria-label=\"{}\">\n",
@@ -102,24 +70,26 @@ std::string svg_bar_chart(const BarChart& c) {
   s += fmt::format("<rect width=\"{}\" height=\"{}\" fill=\"white\"/>\n", width, height);
   s += fmt::format("<text x=\"4\" y=\"16\" font-size=\"13\" font-weight=\"bold\">{}</text>\n", html_escape(c.title));
   const int plot_bottom = top + static_cast<int>(c.rows.size()) * row_h;
-  for (double t : ticks_for(lo, hi, c.log_x)) {
+  for (double t : ticks_for(hi)) {
     const double x = x_of(t);
     s += fmt::format("<line x1=\"{:.1f}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{}\" stroke=\"#e0e0e0\"/>\n", x, top - 4, x, plot_bottom);
     s += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\" fill=\"#444\">{}</text>\n", x, plot_bottom + 14,
                      short_number(t));
   }
-  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"#222\">{}{}</text>\n", label_w + plot_w / 2,
-                   plot_bottom + 32, html_escape(c.x_label), c.log_x ? " (log scale)" : "");
+  s += fmt::format("<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"#444\"/>\n", label_w, top - 4, label_w,
+                   plot_bottom);
+  s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"#222\">{}</text>\n", label_w + plot_w / 2,
+                   plot_bottom + 32, html_escape(c.x_label));
   for (size_t i = 0; i < c.rows.size(); ++i) {
     const BarRow& r = c.rows[i];
     const int y = top + static_cast<int>(i) * row_h;
     s += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\n", label_w - 6, y + 14, html_escape(r.label));
-    if (std::isfinite(r.value) && (!c.log_x || r.value > 0)) {
-      const double x0 = x_of(base), x1 = x_of(r.value);
+    if (std::isfinite(r.value) && r.value >= 0) {
+      const double x0 = x_of(0.0), x1 = x_of(r.value);
       s += fmt::format("<rect x=\"{:.1f}\" y=\"{}\" width=\"{:.1f}\" height=\"{}\" fill=\"{}\"><title>{}: {}</title></rect>\n",
-                       std::min(x0, x1), y + 3, std::max(1.0, std::fabs(x1 - x0)), row_h - 6, r.colour,
-                       html_escape(r.label), short_number(r.value));
-      if (std::isfinite(r.lo) && std::isfinite(r.hi) && (!c.log_x || (r.lo > 0 && r.hi > 0))) {
+                       x0, y + 3, std::max(1.0, x1 - x0), row_h - 6, r.colour, html_escape(r.label),
+                       short_number(r.value));
+      if (std::isfinite(r.lo) && std::isfinite(r.hi)) {
         const double a = x_of(r.lo), b = x_of(r.hi), ym = y + row_h / 2.0;
         s += fmt::format("<path d=\"M{:.1f} {:.1f}H{:.1f}M{:.1f} {:.1f}V{:.1f}M{:.1f} {:.1f}V{:.1f}\" stroke=\"#000\" "
                          "stroke-width=\"1.2\" fill=\"none\"/>\n",
@@ -130,7 +100,7 @@ std::string svg_bar_chart(const BarChart& c) {
     }
     s += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#222\">{}</text>\n", label_w + plot_w + 6, y + 14, html_escape(r.note));
   }
-  if (std::isfinite(c.reference) && (!c.log_x || c.reference > 0)) {
+  if (std::isfinite(c.reference)) {
     const double x = x_of(c.reference);
     s += fmt::format("<line x1=\"{:.1f}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{}\" stroke=\"#c00\" stroke-dasharray=\"4 3\"/>\n", x,
                      top - 6, x, plot_bottom);

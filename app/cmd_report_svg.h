@@ -1,7 +1,8 @@
 #pragma once
 // Inline SVG charts for `raylab report`: horizontal bar charts with min-max
-// whiskers on a log or linear axis, written as self-contained <svg> text
-// (no scripts, no external fonts), so the page needs no network.
+// whiskers, written as self-contained <svg> text (no scripts, no external
+// fonts), so the page needs no network. Bars start at zero on a linear axis,
+// so a bar's length is its value (a log axis has no zero to grow from).
 #include <limits>
 #include <string>
 #include <vector>
@@ -21,8 +22,7 @@ struct BarChart {
   std::string id;  // the element id (tests and links find charts by it)
   std::string title;
   std::string x_label;
-  bool log_x = true;
-  // A vertical reference line (e.g. 1 = as fast as Embree); bars grow from it on a log axis.
+  // A vertical reference line (e.g. 1 = as fast as Embree), drawn over the bars.
   double reference = std::numeric_limits<double>::quiet_NaN();
   std::string reference_label;
   std::vector<BarRow> rows;

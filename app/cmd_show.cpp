@@ -15,11 +15,20 @@
 
 namespace raylab::cli {
 
+namespace {
+// Four levels: enough to see how a structure divides the scene, few enough
+// that the lines do not blend into a haze (the study's pictures use it too).
+constexpr int kDefaultShowDepth = 4;
+// Without --size the picture is the scene's view, at least this wide (the
+// labels and the depth legend need the room).
+constexpr int kMinDefaultWidth = 480;
+}  // namespace
+
 Runner add_show(CLI::App& app) {
   struct Opts {
     std::string scene, positional_scene, accel = "bvh", size, camera, up;
     std::vector<std::string> outs;
-    int depth = 3;
+    int depth = kDefaultShowDepth;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -30,9 +39,13 @@ Runner add_show(CLI::App& app) {
   cmd->add_option("-d,--depth", o->depth, "deepest structure level drawn (0 = the root)")
       ->capture_default_str()
       ->check(CLI::Range(0, 64));
-  cmd->add_option("-o,--out", o->outs, "output file(s): .png or .pfm (overlay on the scene), .ply or .obj (wireframe); repeatable")
+  cmd->add_option("-o,--out", o->outs,
+                  "output file(s), repeatable, each directory must exist: .png (overlay on the scene with a title and "
+                  "a depth legend), .pfm (the overlay alone), .ply or .obj (wireframe)")
       ->required();
-  cmd->add_option("--size", o->size, "overlay image size WIDTHxHEIGHT (default: the scene's view)");
+  cmd->add_option("--size", o->size,
+                  fmt::format("overlay size WIDTHxHEIGHT (default: the scene's view, at least {} pixels wide)",
+                              kMinDefaultWidth));
   cmd->add_option("--camera", o->camera, "camera override, as for render (from=x,y,z,at=x,y,z,up=x,y,z,fov=deg)");
   cmd->add_option("--up", o->up, "the up axis of a mesh file, as for render");
 
@@ -44,7 +57,8 @@ Runner add_show(CLI::App& app) {
     for (const auto& out : o->outs) {
       const std::string ext = lower_extension_of(out);
       if (ext != ".png" && ext != ".pfm" && ext != ".ply" && ext != ".obj")
-        throw std::invalid_argument(fmt::format("--out {}: use a .png or .pfm (overlay), .ply or .obj (wireframe) file name", out));
+        throw std::invalid_argument(fmt::format("-o {}: use a .png or .pfm (overlay), .ply or .obj (wireframe) file name", out));
+      check_output_path(out);
     }
     std::pair<int, int> size{0, 0};
     if (!o->size.empty()) size = parse_size(o->size);
@@ -70,12 +84,22 @@ Runner add_show(CLI::App& app) {
     for (const auto& out : o->outs) {
       const std::string ext = lower_extension_of(out);
       if (ext == ".png" || ext == ".pfm") {
-        const int w = o->size.empty() ? scene.view.width : size.first;
-        const int h = o->size.empty() ? scene.view.height : size.second;
+        int w = scene.view.width, h = scene.view.height;
+        if (!o->size.empty()) {
+          std::tie(w, h) = size;
+        } else if (w < kMinDefaultWidth) {
+          h = std::max(1, h * kMinDefaultWidth / std::max(1, w));
+          w = kMinDefaultWidth;
+        }
         Image img = shade_scene(scene, *accel, w, h);
         draw_outline(img, ViewProjector(scene.view, w, h), outline);
-        const std::string title = fmt::format("{}  depth <= {}  {}", accel->spec(), o->depth, outline.what);
-        draw_text(img, 5, 5, title, Vec3f::Ones(), w >= 600 ? 2 : 1);
+        // The PNG carries the title (the spec and what its layout draws, e.g.
+        // "BVH8 node boxes") and the depth colours; the PFM is the overlay alone.
+        if (ext == ".png") {
+          const std::string title = fmt::format("{}: {}, depth 0 to {}", accel->spec(), outline.what,
+                                                std::max(0, outline.max_depth()));
+          img = structure_picture(img, title, std::max(0, outline.max_depth()));
+        }
         write_image(img, out);
       } else {
         write_outline_wireframe(outline, out);

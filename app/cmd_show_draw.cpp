@@ -11,68 +11,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "app/label_font.h"
 #include "base/atomic_file.h"
 #include "tracer/ray_sets.h"
 
 namespace raylab::cli {
 
 namespace {
-
-// 5x7 glyphs, one byte per row (top first), bit 4 = leftmost column.
-const std::map<char, std::array<uint8_t, 7>>& glyphs() {
-  static const std::map<char, std::array<uint8_t, 7>> g = {
-    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
-    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-    {'+', {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00}},
-    {',', {0x00, 0x00, 0x00, 0x00, 0x0c, 0x04, 0x08}},
-    {'-', {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
-    {'0', {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e}},
-    {'1', {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e}},
-    {'2', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f}},
-    {'3', {0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e}},
-    {'4', {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02}},
-    {'5', {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e}},
-    {'6', {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e}},
-    {'7', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e}},
-    {'9', {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c}},
-    {':', {0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00}},
-    {'<', {0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02}},
-    {'=', {0x00, 0x00, 0x1f, 0x00, 0x1f, 0x00, 0x00}},
-    {'>', {0x10, 0x08, 0x04, 0x02, 0x04, 0x08, 0x10}},
-    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1f}},
-    {'a', {0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f}},
-    {'b', {0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x1e}},
-    {'c', {0x00, 0x00, 0x0e, 0x10, 0x10, 0x11, 0x0e}},
-    {'d', {0x01, 0x01, 0x0f, 0x11, 0x11, 0x11, 0x0f}},
-    {'e', {0x00, 0x00, 0x0e, 0x11, 0x1f, 0x10, 0x0e}},
-    {'f', {0x06, 0x09, 0x08, 0x1c, 0x08, 0x08, 0x08}},
-    {'g', {0x00, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x0e}},
-    {'h', {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11}},
-    {'i', {0x04, 0x00, 0x0c, 0x04, 0x04, 0x04, 0x0e}},
-    {'j', {0x02, 0x00, 0x06, 0x02, 0x02, 0x12, 0x0c}},
-    {'k', {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12}},
-    {'l', {0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e}},
-    {'m', {0x00, 0x00, 0x1a, 0x15, 0x15, 0x11, 0x11}},
-    {'n', {0x00, 0x00, 0x16, 0x19, 0x11, 0x11, 0x11}},
-    {'o', {0x00, 0x00, 0x0e, 0x11, 0x11, 0x11, 0x0e}},
-    {'p', {0x00, 0x00, 0x1e, 0x11, 0x1e, 0x10, 0x10}},
-    {'q', {0x00, 0x00, 0x0f, 0x11, 0x0f, 0x01, 0x01}},
-    {'r', {0x00, 0x00, 0x16, 0x19, 0x10, 0x10, 0x10}},
-    {'s', {0x00, 0x00, 0x0f, 0x10, 0x0e, 0x01, 0x1e}},
-    {'t', {0x08, 0x08, 0x1c, 0x08, 0x08, 0x09, 0x06}},
-    {'u', {0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0d}},
-    {'v', {0x00, 0x00, 0x11, 0x11, 0x11, 0x0a, 0x04}},
-    {'w', {0x00, 0x00, 0x11, 0x11, 0x15, 0x15, 0x0a}},
-    {'x', {0x00, 0x00, 0x11, 0x0a, 0x04, 0x0a, 0x11}},
-    {'y', {0x00, 0x00, 0x11, 0x11, 0x0f, 0x01, 0x0e}},
-    {'z', {0x00, 0x00, 0x1f, 0x02, 0x04, 0x08, 0x1f}},
-  };
-  return g;
-}
 
 void blend(Image& img, int x, int y, const Vec3f& c, float alpha) {
   if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
@@ -218,23 +163,6 @@ Vec3f cost_colour(float t) {
   return (1.0f - f) * stops[i] + f * stops[i + 1];
 }
 
-void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& colour, int scale) {
-  int cx = x;
-  for (char ch : text) {
-    const char c = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    const auto it = glyphs().find(c);
-    if (it != glyphs().end())
-      for (int row = 0; row < 7; ++row)
-        for (int col = 0; col < 5; ++col)
-          if (it->second[row] & (0x10 >> col))
-            for (int sy = 0; sy < scale; ++sy)
-              for (int sx = 0; sx < scale; ++sx) blend(img, cx + col * scale + sx, y + row * scale + sy, colour, 1.0f);
-    cx += 6 * scale;
-  }
-}
-
-int text_width(const std::string& text, int scale) { return static_cast<int>(text.size()) * 6 * scale; }
-
 double CostScale::to_unit(double v) const {
   if (!std::isfinite(v)) return 0.0;
   const double a = log ? std::log10(1.0 + std::max(0.0, lo)) : lo;
@@ -249,7 +177,7 @@ double CostScale::from_unit(double t) const {
   return std::pow(10.0, a + t * (b - a)) - 1.0;
 }
 
-CostScale fit_cost_scale(const std::vector<float>& values) {
+CostScale fit_cost_scale(const std::vector<float>& values, ScaleKind kind) {
   CostScale s;
   std::vector<float> nonzero;
   for (float v : values)
@@ -261,9 +189,33 @@ CostScale fit_cost_scale(const std::vector<float>& values) {
   const double max = *std::max_element(nonzero.begin(), nonzero.end());
   s.lo = 0.0;
   s.hi = max;
-  s.log = max > 100.0 * median;
+  s.log = kind == ScaleKind::Log || (kind == ScaleKind::Auto && max > 100.0 * median);
   return s;
 }
+
+std::vector<std::string> wrap_text(const std::string& text, int width, int px) {
+  std::vector<std::string> lines;
+  std::string line;
+  size_t start = 0;
+  while (start < text.size()) {
+    // The next word with the separator that ends it (a space, or ',' ':' '=' kept on this line).
+    size_t end = text.find_first_of(" ,:", start);
+    end = end == std::string::npos ? text.size() : end + 1;
+    const std::string word = text.substr(start, end - start);
+    start = end;
+    if (!line.empty() && text_width(line + word, px) > width) {
+      while (!line.empty() && line.back() == ' ') line.pop_back();
+      lines.push_back(line);
+      line.clear();
+    }
+    line += line.empty() && word == " " ? "" : word;
+  }
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  if (!line.empty()) lines.push_back(line);
+  return lines;
+}
+
+int label_size_for(int width) { return std::clamp(width / 30, 11, 16); }
 
 namespace {
 
@@ -271,46 +223,138 @@ std::string tick_text(double v) {
   if (v == 0.0) return "0";
   const double a = std::fabs(v);
   if (a >= 1e5 || a < 1e-2) return fmt::format("{:.1e}", v);
-  if (a >= 100) return fmt::format("{:.0f}", v);
+  if (a >= 100 || a == std::round(a)) return fmt::format("{:.0f}", v);
   if (a >= 10) return fmt::format("{:.1f}", v);
   return fmt::format("{:.2f}", v);
+}
+
+// Round tick values for the colour bar: 0 and round linear steps, or 0 and
+// 1, 10, 100, ... (with 3, 30, ... over few decades) on a log scale.
+std::vector<double> colour_bar_ticks(const CostScale& s) {
+  std::vector<double> t = {s.lo};
+  if (!(s.hi > s.lo)) return t;
+  if (s.log) {
+    const int top = static_cast<int>(std::floor(std::log10(std::max(1.0, s.hi))));
+    for (int e = 0; e <= top; ++e)
+      for (double m : top <= 2 ? std::vector<double>{1, 3} : std::vector<double>{1}) {
+        const double v = m * std::pow(10.0, e);
+        if (v > s.lo && v <= s.hi) t.push_back(v);
+      }
+    return t;
+  }
+  const double raw = (s.hi - s.lo) / 4.0;
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double step = raw / mag < 2 ? 2 * mag : raw / mag < 5 ? 5 * mag : 10 * mag;
+  for (double v = s.lo + step; v <= s.hi * (1 + 1e-9); v += step) t.push_back(v);
+  return t;
+}
+
+void fill_rect(Image& img, int x0, int y0, int x1, int y1, const Vec3f& c) {
+  for (int y = std::max(0, y0); y < std::min(img.height, y1); ++y)
+    for (int x = std::max(0, x0); x < std::min(img.width, x1); ++x) img.set(x, y, c);
+}
+
+// `picture` with bands of `above` and `below` pixels of background added.
+Image with_bands(const Image& picture, int above, int below, const Vec3f& bg) {
+  Image img(picture.width, picture.height + above + below);
+  fill_rect(img, 0, 0, img.width, img.height, bg);
+  for (int y = 0; y < picture.height; ++y)
+    for (int x = 0; x < picture.width; ++x) img.set(x, y + above, picture.pixel(x, y));
+  return img;
 }
 
 }  // namespace
 
 Image cost_picture(const std::vector<float>& values, int width, int height, const CostScale& scale,
-                   const std::string& label, const std::string& title) {
-  const int text_scale = width >= 400 ? 2 : 1;
-  const int band = 14 + 3 * text_height(text_scale) + 10;
-  Image img(width, height + band);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      img.set(x, y, cost_colour(static_cast<float>(scale.to_unit(values[static_cast<size_t>(y) * width + x]))));
+                   const std::string& label, const std::string& title, int title_rows) {
+  const int px = label_size_for(width), line = text_height(px);
+  const int margin = 6, bar_h = 10;
   const Vec3f bg(0.97f, 0.97f, 0.97f), ink(0.02f, 0.02f, 0.02f);
-  for (int y = height; y < height + band; ++y)
-    for (int x = 0; x < width; ++x) img.set(x, y, bg);
-  // Colour bar with five ticks.
-  const int margin = 8, bar_y = height + 6, bar_h = 10;
+  // Title lines above the picture (never over it), the colour bar, its ticks
+  // and the label below.
+  const std::vector<std::string> title_lines = title.empty() ? std::vector<std::string>{} : wrap_text(title, width - 2 * margin, px);
+  const std::string legend = label + (scale.log ? " (log scale)" : "");
+  const std::vector<std::string> legend_lines = wrap_text(legend, width - 2 * margin, px);
+  const int rows = std::max(static_cast<int>(title_lines.size()), title_rows);
+  const int above = rows == 0 ? 0 : rows * line + 6;
+  const int below = 6 + bar_h + 5 + line + 2 + static_cast<int>(legend_lines.size()) * line + 4;
+  Image picture(width, height);
+  if (values.empty()) {
+    fill_rect(picture, 0, 0, width, height, Vec3f::Constant(0.2f));
+    const std::string note = "no per-ray counters";
+    const int npx = fitting_text_size(note, width - 2 * margin, 8, px);
+    draw_text(picture, std::max(0, (width - text_width(note, npx)) / 2), (height - text_height(npx)) / 2, note,
+              Vec3f::Ones(), npx);
+  } else {
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        picture.set(x, y, cost_colour(static_cast<float>(scale.to_unit(values[static_cast<size_t>(y) * width + x]))));
+  }
+  Image img = with_bands(picture, above, below, bg);
+  for (size_t i = 0; i < title_lines.size(); ++i) draw_text(img, margin, 3 + static_cast<int>(i) * line, title_lines[i], ink, px);
+  const int bar_y = above + height + 6;
   const int bar_w = std::max(1, width - 2 * margin);
   for (int x = 0; x < bar_w; ++x)
     for (int y = 0; y < bar_h; ++y)
       img.set(margin + x, bar_y + y, cost_colour(static_cast<float>(x) / std::max(1, bar_w - 1)));
-  const int ticks = width >= 200 ? 5 : 3;
-  for (int k = 0; k < ticks; ++k) {
-    const double t = static_cast<double>(k) / (ticks - 1);
-    const int tx = margin + static_cast<int>(t * (bar_w - 1));
+  // Ticks at round values; a label is skipped when it would overlap the previous one.
+  int last_right = -1000;
+  for (double v : colour_bar_ticks(scale)) {
+    const int tx = margin + static_cast<int>(scale.to_unit(v) * (bar_w - 1));
     for (int y = 0; y < 4; ++y) blend(img, tx, bar_y + bar_h + y, ink, 1.0f);
-    const std::string s = tick_text(scale.from_unit(t));
-    const int w = text_width(s, text_scale);
-    draw_text(img, std::clamp(tx - w / 2, 0, std::max(0, width - w)), bar_y + bar_h + 5, s, ink, text_scale);
+    const std::string s = tick_text(v);
+    const int w = text_width(s, px);
+    const int left = std::clamp(tx - w / 2, 0, std::max(0, width - w));
+    if (left < last_right + 4) continue;
+    draw_text(img, left, bar_y + bar_h + 4, s, ink, px);
+    last_right = left + w;
   }
-  const std::string l = label + (scale.log ? ", log" : "");
-  draw_text(img, margin, bar_y + bar_h + 8 + text_height(text_scale) + 2, l, ink, text_scale);
-  if (!title.empty()) {
-    const int w = text_width(title, text_scale), h = text_height(text_scale);
-    for (int y = 2; y < 6 + h; ++y)
-      for (int x = 2; x < 6 + w; ++x) blend(img, x, y, Vec3f::Zero(), 0.6f);
-    draw_text(img, 4, 4, title, Vec3f::Ones(), text_scale);
+  const int label_y = bar_y + bar_h + 5 + line + 2;
+  for (size_t i = 0; i < legend_lines.size(); ++i)
+    draw_text(img, margin, label_y + static_cast<int>(i) * line, legend_lines[i], ink, px);
+  return img;
+}
+
+Image structure_picture(const Image& overlay, const std::string& title, int max_depth) {
+  const int width = overlay.width, px = label_size_for(width), line = text_height(px), margin = 6;
+  const Vec3f bg(0.97f, 0.97f, 0.97f), ink(0.02f, 0.02f, 0.02f);
+  const std::vector<std::string> title_lines = wrap_text(title, width - 2 * margin, px);
+  // The depth legend: a swatch per level in the colour its lines are drawn
+  // in, laid out in rows that fit the width.
+  struct Item {
+    std::string text;
+    int depth;
+  };
+  std::vector<Item> items;
+  for (int d = 0; d <= max_depth; ++d) items.push_back({d == 0 ? "0 (root)" : std::to_string(d), d});
+  const int swatch = std::max(8, line - 4), gap = px;
+  const std::string lead = "depth:";
+  std::vector<std::vector<Item>> rows(1);
+  int x = margin + text_width(lead, px) + gap / 2;
+  for (const auto& it : items) {
+    const int w = swatch + 4 + text_width(it.text, px) + gap;
+    if (x + w > width - margin && !rows.back().empty()) {
+      rows.emplace_back();
+      x = margin + text_width(lead, px) + gap / 2;
+    }
+    rows.back().push_back(it);
+    x += w;
+  }
+  const int above = static_cast<int>(title_lines.size()) * line + 6;
+  const int below = static_cast<int>(rows.size()) * (line + 2) + 8;
+  Image img = with_bands(overlay, above, below, bg);
+  for (size_t i = 0; i < title_lines.size(); ++i) draw_text(img, margin, 3 + static_cast<int>(i) * line, title_lines[i], ink, px);
+  int y = above + overlay.height + 5;
+  for (const auto& row : rows) {
+    draw_text(img, margin, y, lead, ink, px);
+    x = margin + text_width(lead, px) + gap / 2;
+    for (const auto& it : row) {
+      const int sy = y + (line - swatch) / 2;
+      fill_rect(img, x, sy, x + swatch, sy + swatch, depth_colour(it.depth, max_depth));
+      draw_text(img, x + swatch + 4, y, it.text, ink, px);
+      x += swatch + 4 + text_width(it.text, px) + gap;
+    }
+    y += line + 2;
   }
   return img;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // Drawing for the picture commands (`raylab show`, `raylab render --aov`):
 // a quick eye-light shading of a scene, structure outlines projected over
-// it, colour scales with a legend, and a small bitmap font for labels.
+// it, colour scales with a legend, and labels (app/label_font.h).
 // Everything draws into a linear RGB Image (tracer/image.h).
 #include <string>
 #include <vector>
@@ -54,12 +54,6 @@ void draw_outline(Image& img, const ViewProjector& proj, const StructureOutline&
 // for t in [0, 1]; our own control points, interpolated in linear RGB.
 Vec3f cost_colour(float t);
 
-// Text in a 5x7 bitmap font scaled by `scale` (lower case, digits and
-// . , - + / : = ( ) _ % < >; upper case is drawn as lower case), top-left at (x, y).
-void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& colour, int scale = 1);
-int text_width(const std::string& text, int scale = 1);
-inline int text_height(int scale = 1) { return 7 * scale; }
-
 // How a cost value maps onto [0, 1] of the colour map.
 struct CostScale {
   double lo = 0.0, hi = 1.0;
@@ -68,15 +62,33 @@ struct CostScale {
   double from_unit(double t) const;
 };
 
-// A scale covering `values` (0 .. max; log when max > 100 * median of the
-// non-zero values).
-CostScale fit_cost_scale(const std::vector<float>& values);
+// How a cost picture's colours are scaled (render --aov-scale).
+enum class ScaleKind { Auto, Linear, Log };
 
-// The cost values as a colour image with a legend band below: a colour bar,
-// tick values and `label` (e.g. "nodes per ray"). `title` is drawn in the
-// top-left corner over the image (empty = none).
+// A scale covering `values`: 0 .. max, linear or log10(1 + v); Auto takes
+// log when max > 100 * median of the non-zero values.
+CostScale fit_cost_scale(const std::vector<float>& values, ScaleKind kind = ScaleKind::Auto);
+
+// `text` broken into lines no wider than `width` pixels at `px` (at spaces,
+// and after ',' and ':' as specs have no spaces); a word wider than that
+// stays on a line of its own.
+std::vector<std::string> wrap_text(const std::string& text, int width, int px);
+
+// The label size for a picture `width` pixels wide (11 to 16 px).
+int label_size_for(int width);
+
+// The cost values as a colour image with `title` (wrapped to fit; empty =
+// none) in a band above and a legend band below: a colour bar, round tick
+// values and `label` (e.g. "nodes per ray", "(log scale)" added when it is).
+// `title_rows` reserves at least that many title lines (tiles of one sheet
+// line up). Empty `values`: a grey picture saying "no per-ray counters".
 Image cost_picture(const std::vector<float>& values, int width, int height, const CostScale& scale,
-                   const std::string& label, const std::string& title);
+                   const std::string& label, const std::string& title, int title_rows = 0);
+
+// `raylab show`'s picture: the overlay with `title` (wrapped to fit) in a
+// band above and a legend below: one swatch per depth 0 .. max_depth in the
+// colour its elements are drawn in.
+Image structure_picture(const Image& overlay, const std::string& title, int max_depth);
 
 // Images side by side in rows of `columns` (all the same size), on a dark background.
 Image contact_sheet(const std::vector<Image>& tiles, int columns);

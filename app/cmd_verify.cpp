@@ -24,7 +24,7 @@ nlohmann::json verify_record_json(const VerifyRecord& r) {
 
 Runner add_verify(CLI::App& app) {
   struct Opts {
-    std::string scene, positional_scene, accel = "bvh,brute", ray_sets = "primary,random", json;
+    std::string scene, positional_scene, accel = "bvh;brute", ray_sets = "primary,random", out;
     size_t rays = 65536;
     uint64_t seed = 1;
     int threads = 0;
@@ -34,12 +34,13 @@ Runner add_verify(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("verify", "compare accelerators' hits with Embree (robust) on the same rays");
   add_scene_options(cmd, o->positional_scene, o->scene,
                     "the scene: procedural spec, mesh file or JSON scene file (default cornell)");
-  cmd->add_option("--accel", o->accel, "accelerator specs, comma separated, or 'all'")->capture_default_str();
+  add_accel_list_option(cmd, o->accel);
   add_ray_count_option(cmd, o->rays, "rays per ray set");
   cmd->add_option("--ray-sets", o->ray_sets, "ray sets, comma separated: primary, random, diffuse, shadow")->capture_default_str();
   cmd->add_option("--seed", o->seed, "random seed")->capture_default_str();
   add_threads_option(cmd, o->threads);
-  cmd->add_option("-o,--json", o->json, "write records to this JSON file (also when interrupted: complete false)");
+  cmd->add_option("-o,--out", o->out, "the JSON report (written also when interrupted, with complete false)");
+  add_renamed_option(cmd, "--json", "-o/--out FILE");
   cmd->add_flag("-q,--quiet", o->quiet, "no progress line");
 
   return [o]() {
@@ -50,32 +51,36 @@ Runner add_verify(CLI::App& app) {
     vo.threads = o->threads;
     vo.ray_sets = parse_name_list(o->ray_sets);
     check_ray_set_names(vo.ray_sets);  // before loading a possibly large scene
+    if (!o->out.empty()) check_output_path(o->out);
     const Scene scene = load_scene(pick_scene("verify", o->scene, o->positional_scene, "cornell"));
     InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
     std::printf("verify %s (%zu triangle%s) against %s\n", scene.name.c_str(), scene.num_triangles(),
                 scene.num_triangles() == 1 ? "" : "s", vo.reference.c_str());
     std::printf("%-28s %-8s %8s %9s %9s %6s %12s %12s %9s %11s  %s\n", "accel", "rays", "count", "hit/miss", "prim", "ties",
-                "raylab_wrong", "embree_wrong", "occl", "max rel t", "result");
+                "raylab_wrong", "embree_wrong", "occl", "max rel dt", "result");
     std::fflush(stdout);
 
     ProgressLine progress("verify", !o->quiet && stderr_is_terminal());
     vo.stop = interrupt.flag();
     vo.on_start = [&](size_t i, size_t n, const std::string& what) { progress.update(i, n, what); };
-    const auto records = verify_accelerators(scene, specs, vo);
-    progress.clear();
-
     bool failed = false;
     std::set<std::string> noted;
     nlohmann::json recs = nlohmann::json::array();
-    for (const auto& r : records) {
+    // Each row as soon as its record is finished.
+    vo.on_record = [&](const VerifyRecord& r) {
+      progress.clear();
       std::printf("%-28s %-8s %8zu %9zu %9zu %6zu %12zu %12zu %9zu %11.3g  %s\n", r.accel.c_str(), r.ray_set.c_str(),
                   r.rays, r.hit_miss_disagree, r.prim_disagree, r.ties, r.raylab_wrong, r.embree_wrong,
                   r.occlusion_disagree, r.max_rel_t_err, r.failed() ? "FAIL" : "ok");
+      std::fflush(stdout);
       failed |= r.failed();
       recs.push_back(verify_record_json(r));
       if (noted.insert(r.ray_set).second) std::fputs(ray_set_size_note(r.ray_set, o->rays, r.rays).c_str(), stderr);
-    }
-    if (const int rc = write_check_report("verify", o->json, recs, interrupt.interrupted())) return rc;
+    };
+    verify_accelerators(scene, specs, vo);
+    progress.clear();
+
+    if (const int rc = write_check_report("verify", o->out, recs, interrupt.interrupted())) return rc;
     return failed ? kExitCheckFailed : 0;
   };
 }

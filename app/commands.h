@@ -30,8 +30,24 @@ Runner add_compare(CLI::App& app);
 Runner add_show(CLI::App& app);
 Runner add_report(CLI::App& app);
 
-// "512x384" -> (512, 384); throws CLI::ValidationError style std::invalid_argument.
+// The largest image side --size takes (a 65536 x 65536 image is 48 GiB of floats).
+inline constexpr int kMaxImageSide = 65536;
+
+// "512x384" -> (512, 384); throws std::invalid_argument naming the limit.
 std::pair<int, int> parse_size(const std::string& text);
+
+// Output files go where they are asked, nowhere else: the directory of
+// `path` must exist (a missing one is bad input, exit 2, and nothing is
+// created) and `path` must not be a directory. `option` names the option in
+// the message. Checked before any long work, so a typo costs nothing.
+void check_output_path(const std::string& path, const std::string& option = "-o");
+
+// "--accel" taking a list of specs (verify, stress, bench): one help text.
+CLI::Option* add_accel_list_option(CLI::App* cmd, std::string& accel);
+
+// A hidden option under an old name that fails with "OLD was renamed: use
+// NEW", so a script written for the old name gets told the new one.
+void add_renamed_option(CLI::App* cmd, const std::string& old_name, const std::string& new_name);
 
 // Comma-separated list of positive integers ("1,2").
 std::vector<int> parse_int_list(const std::string& text, const char* what);
@@ -39,8 +55,9 @@ std::vector<std::string> parse_name_list(const std::string& text);
 
 // --- One vocabulary for every subcommand (README: "Command line") ---
 // --ray-sets NAMES  which ray sets;  --rays N  how many rays per set;
-// a positional scene or --scene;  -t/--threads (0 = all cores);  -o the
-// command's output file.
+// a positional scene or --scene;  -t/--threads (0 = all cores);  -o/--out
+// the command's output file (render's image, the JSON report of verify,
+// stress, bench and compare, report's page, rays' ray file, show's pictures).
 
 // The scene given positionally or with --scene (both at once is an error
 // naming the two); `fallback` when neither.

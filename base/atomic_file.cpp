@@ -15,10 +15,9 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   if (path.empty()) throw OutputError("empty output path");
   const fs::path target(path);
   std::error_code ec;
-  if (target.has_parent_path()) {
-    fs::create_directories(target.parent_path(), ec);
-    if (ec) throw OutputError(fmt::format("{}: cannot create directory: {}", path, ec.message()));
-  }
+  // Nothing is created where none was asked for: a missing directory is the caller's error.
+  if (target.has_parent_path() && !fs::is_directory(target.parent_path(), ec))
+    throw OutputError(fmt::format("{}: directory {} does not exist", path, target.parent_path().string()));
   if (fs::is_directory(target, ec)) throw OutputError(fmt::format("{}: is a directory", path));
   const std::string tmp = fmt::format("{}.tmp.{}", path, static_cast<long>(::getpid()));
   try {

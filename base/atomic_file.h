@@ -14,7 +14,7 @@ class OutputError : public std::runtime_error {
 };
 
 // Calls write(stream) on a temporary file next to `path`, then renames it to
-// `path`. Creates missing parent directories. On any failure (including an
+// `path`. The directory must exist (none is created). On any failure (including an
 // exception from write) the temporary file is removed and OutputError thrown.
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 

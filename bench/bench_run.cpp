@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <new>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -23,7 +24,7 @@ namespace raylab {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BenchRecord, scene, triangles, accel, ray_set, threads, rays, build_ms, bytes,
                                    mrays_per_s, mrays_min, mrays_max, prepare_ms, embree_mrays_per_s, ratio_to_embree,
                                    best_embree, best_embree_mrays_per_s, ratio_to_best_embree, embree_agreement, trace_s,
-                                   extra, rss_before_build_bytes, rss_peak_bytes)
+                                   embree_trace_s, trace_passes, shortest_repeat_s, extra, rss_before_build_bytes, rss_peak_bytes)
 
 nlohmann::json BenchRecord::to_json() const {
   nlohmann::json j = *this;
@@ -165,6 +166,9 @@ BenchRecord make_record(const std::string& scene, size_t triangles, const Built&
   r.max_depth = b.stats.max_depth;
   r.has_tree = b.stats.nodes > 0 || b.stats.leaves > 0;
   r.trace_s = timing.accel.repeat_s;
+  r.embree_trace_s = timing.embree.repeat_s;
+  r.trace_passes = timing.accel.passes;
+  r.shortest_repeat_s = timing.accel.repeat_wall_s;
   r.extra = b.stats.extra;
   return r;
 }
@@ -234,7 +238,7 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   std::vector<TraceOutput> embree_out(sets.size());
   for (size_t s = 0; s < sets.size(); ++s) {
     embree_prepared[s] = prepare_set(*embree.accel, sets[s]);
-    trace_set(*embree.accel, sets[s], 1, embree_out[s], nullptr, embree_prepared[s].rays.get());
+    trace_set(*embree.accel, sets[s], 1, embree_out[s], nullptr, embree_prepared[s].rays.get(), o.stop);
   }
   // Filled only when Embree is released to make room (then timed once, first).
   std::map<std::pair<size_t, int>, TraceTiming> embree_timed_first;
@@ -242,7 +246,8 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
     const auto it = embree_timed_first.find({s, threads});
     return it != embree_timed_first.end()
                ? it->second
-               : time_trace(*embree.accel, sets[s], threads, o.repeats, embree_prepared[s].rays.get());
+               : time_trace(*embree.accel, sets[s], threads, o.repeats, embree_prepared[s].rays.get(), o.min_time_s,
+                            o.stop);
   };
 
   std::vector<BenchRecord> records;
@@ -302,19 +307,30 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       if (!is_reference) own = prepare_set(accel, set);
       const PreparedSet& prep = is_reference ? embree_prepared[s] : own;
       TraceOutput out;
-      trace_set(accel, set, 1, out, nullptr, prep.rays.get());
+      trace_set(accel, set, 1, out, nullptr, prep.rays.get(), o.stop);
+      if (stopped()) break;
       const double agree = agreement(set, out, embree_out[s]);
       TraversalStats ts;
-      if (o.instrumented) trace_set(accel, set, 1, out, &ts, prep.rays.get());
+      if (o.instrumented) trace_set(accel, set, 1, out, &ts, prep.rays.get(), o.stop);
       for (int threads : o.threads) {
         if (stopped()) break;
         say(fmt::format("tracing {} {} rays with {} ({} thread{})", set.rays.size(), set.name, b.spec, threads,
                         threads == 1 ? "" : "s"));
-        // Embree and the accelerator timed back to back, so drift on this
-        // shared machine affects both alike, both on their prepared rays
-        // (unless Embree had to go first to make room).
-        const TraceTiming et = embree_timing(s, threads);
-        const TraceTiming t = is_reference ? et : time_trace(accel, set, threads, o.repeats, prep.rays.get());
+        // Embree and the accelerator timed in alternation, repeat by repeat,
+        // so load that changes over seconds on this shared machine affects
+        // both alike, both on their prepared rays (unless Embree had to go
+        // first to make room: then one after the other).
+        TraceTiming t, et;
+        if (is_reference) {
+          t = et = embree_timing(s, threads);
+        } else if (embree_timed_first.empty()) {
+          std::tie(t, et) = time_trace_alternating(accel, prep.rays.get(), *embree.accel, embree_prepared[s].rays.get(),
+                                                   set, threads, o.repeats, o.min_time_s, o.stop);
+        } else {
+          et = embree_timing(s, threads);
+          t = time_trace(accel, set, threads, o.repeats, prep.rays.get(), o.min_time_s, o.stop);
+        }
+        if (stopped()) break;  // interrupted inside the cell: its timings are partial, it is not kept
         BenchRecord r = make_record(scene.name, triangles, b, set, threads, prep, TimedPair{t, et}, agree, ts);
         if (!embree_timed_first.empty()) r.extra["embree_timed_first"] = 1;
         r.rss_before_build_bytes = rss_before_build;
@@ -337,7 +353,8 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
   static const char* const kColumns[] = {"scene",       "triangles",   "accel",          "ray_set",          "threads",
                                          "rays",        "build_ms",    "bytes",          "bytes_per_triangle",
                                          "mrays_per_s", "mrays_min",   "mrays_max",      "prepare_ms", "embree_mrays_per_s",
-                                         "ratio_to_embree", "best_embree", "ratio_to_best_embree", "embree_agreement", "nodes_per_ray", "tris_per_ray",
+                                         "ratio_to_embree", "best_embree", "ratio_to_best_embree", "embree_agreement",
+                                         "trace_passes", "shortest_repeat_s", "nodes_per_ray", "tris_per_ray",
                                          "sah_cost",    "nodes",       "leaves",         "max_depth",
                                          "rss_before_build_bytes", "rss_peak_bytes"};
   auto quote = [](const std::string& v) {
@@ -367,18 +384,75 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
 }
 
 std::string format_bench_table(const std::vector<BenchRecord>& records) {
-  // "ratio": to single-ray `embree`; "/best": to the fastest Embree mode of the run (named in the last column).
-  std::string s = fmt::format("{:<34} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7}  {}\n", "accel",
-                              "rays", "thr", "build ms", "bytes", "prep ms", "Mrays/s", "embree", "ratio", "/best",
-                              "agree %", "nodes/r", "tris/r", "best embree");
+  // "x embree": to single-ray `embree` timed back to back in the same cell;
+  // "x best": to the fastest Embree mode of the run (named in the last
+  // column), shown only when another Embree mode ran.
+  bool other_modes = false;
+  for (const auto& r : records) other_modes |= !r.best_embree.empty() && r.best_embree != "embree";
+  std::string s = fmt::format("{:<34} {:<8} {:>3} {:>9} {:>10} {:>8} {:>9} {:>9} {:>8} ", "accel", "rays", "thr",
+                              "build ms", "bytes", "prep ms", "Mrays/s", "embree", "x embree");
+  if (other_modes) s += fmt::format("{:>8} ", "x best");
+  s += fmt::format("{:>8} {:>7} {:>7}{}\n", "agree %", "nodes/r", "tris/r", other_modes ? "  best embree" : "");
   auto per_ray = [](double v) { return std::isfinite(v) ? fmt::format("{:.1f}", v) : std::string("n/a"); };
   for (const auto& r : records) {
-    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>8.3f} {:>8.3f} {:>7} {:>7}  {}\n",
+    s += fmt::format("{:<34} {:<8} {:>3} {:>9.2f} {:>10} {:>8.2f} {:>9.2f} {:>9.2f} {:>8.3f} ",
                      r.accel.size() > 34 ? r.accel.substr(0, 34) : r.accel, r.ray_set, r.threads, r.build_ms, r.bytes,
-                     r.prepare_ms, r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree, r.ratio_to_best_embree,
-                     100.0 * r.embree_agreement, per_ray(r.nodes_per_ray), per_ray(r.tris_per_ray), r.best_embree);
+                     r.prepare_ms, r.mrays_per_s, r.embree_mrays_per_s, r.ratio_to_embree);
+    if (other_modes) s += fmt::format("{:>8.3f} ", r.ratio_to_best_embree);
+    s += fmt::format("{:>8.3f} {:>7} {:>7}{}\n", 100.0 * r.embree_agreement, per_ray(r.nodes_per_ray),
+                     per_ray(r.tris_per_ray), other_modes ? "  " + r.best_embree : std::string());
   }
   return s;
+}
+
+std::vector<EmbreeNoise> embree_noise(const std::vector<BenchRecord>& records) {
+  std::map<std::tuple<std::string, std::string, int>, std::vector<double>> speeds;
+  std::vector<std::tuple<std::string, std::string, int>> order;
+  for (const auto& r : records) {
+    if (!(r.embree_mrays_per_s > 0)) continue;
+    const auto key = std::make_tuple(r.scene, r.ray_set, r.threads);
+    if (!speeds.count(key)) order.push_back(key);
+    speeds[key].push_back(r.embree_mrays_per_s);
+  }
+  std::vector<EmbreeNoise> out;
+  for (const auto& key : order) {
+    std::vector<double> v = speeds[key];
+    if (v.size() < 2) continue;
+    std::sort(v.begin(), v.end());
+    EmbreeNoise n;
+    std::tie(n.scene, n.ray_set, n.threads) = key;
+    n.timings = v.size();
+    n.min_mrays = v.front();
+    n.max_mrays = v.back();
+    n.median_mrays = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    out.push_back(n);
+  }
+  return out;
+}
+
+std::string format_embree_noise(const std::vector<EmbreeNoise>& noise) {
+  if (noise.empty()) return {};
+  std::string s =
+      "noise floor: single-ray Embree timed back to back with each structure (median Mrays/s, min - max, "
+      "spread = (max - min) / median); ratios closer than the spread are not resolved\n";
+  for (const auto& n : noise)
+    s += fmt::format("  embree {:<8} t{:<3} {:>3} timings: {:>8.2f} ({:.2f} - {:.2f}), spread {:.1f} %\n", n.ray_set,
+                     n.threads, n.timings, n.median_mrays, n.min_mrays, n.max_mrays, n.spread_pct());
+  return s;
+}
+
+std::string bench_short_repeat_warning(const std::vector<BenchRecord>& records) {
+  std::vector<std::string> cells;
+  for (const auto& r : records)
+    if (r.shortest_repeat_s > 0 && r.shortest_repeat_s < kShortRepeatS)
+      cells.push_back(fmt::format("{} {} t{} ({:.2g} ms)", r.accel, r.ray_set, r.threads, 1e3 * r.shortest_repeat_s));
+  if (cells.empty()) return {};
+  const size_t shown = std::min<size_t>(cells.size(), 8);
+  return fmt::format("warning: {} cell{} timed in repeats under {:.0f} ms, where the clock and the scheduler dominate: "
+                     "{}{}; raise --min-time (seconds per timed repeat)\n",
+                     cells.size(), cells.size() == 1 ? "" : "s", 1e3 * kShortRepeatS,
+                     fmt::join(cells.begin(), cells.begin() + static_cast<std::ptrdiff_t>(shown), ", "),
+                     cells.size() > shown ? fmt::format(" and {} more", cells.size() - shown) : std::string());
 }
 
 std::string depth_cap_warning(const BuildStats& stats) {

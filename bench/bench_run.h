@@ -16,12 +16,22 @@
 
 namespace raylab {
 
+// The default minimum time per timed repeat (BenchOptions::min_time_s).
+inline constexpr double kDefaultMinTimeS = 0.05;
+// A timed repeat shorter than this is named in a warning (bench_short_repeat_warning).
+inline constexpr double kShortRepeatS = 0.01;
+
 struct BenchOptions {
   std::vector<std::string> ray_sets = {"primary", "random"};
   int width = 512, height = 512;  // primary rays
   size_t random_rays = 262144;
   std::vector<int> threads = {1};
   int repeats = 5;
+  // Each timed repeat traces the set as many times as it takes to last at
+  // least this long (Google Benchmark's --benchmark_min_time): a set traced
+  // in about a millisecond is otherwise timed at the scheduler's granularity
+  // and its repeats scatter by tens of percent. 0 = one trace per repeat.
+  double min_time_s = kDefaultMinTimeS;
   int build_repeats = 1;
   uint64_t seed = 1;
   bool instrumented = true;  // one extra instrumented pass for per-ray counters
@@ -29,8 +39,9 @@ struct BenchOptions {
   // Accelerators named "brute" are skipped on scenes with more triangles than
   // this (their trace time grows with triangles x rays); 0 = never skip.
   size_t brute_max_triangles = 0;
-  // Polled between cells: when it becomes true run_bench returns the records
-  // finished so far (Ctrl-C in `raylab bench`).
+  // Polled between cells and inside their traces, per chunk of rays: when it
+  // becomes true run_bench returns the records finished so far (Ctrl-C in
+  // `raylab bench`); the cell it was in is dropped.
   const std::atomic<bool>* stop = nullptr;
   // When non-empty, these sets are traced instead of generating ray_sets
   // (`raylab bench --ray-file`).
@@ -74,7 +85,13 @@ struct BenchRecord {
   size_t nodes = 0, leaves = 0;                 // 0 with has_tree false: not reported (Embree)
   int max_depth = 0;
   bool has_tree = true;
-  std::vector<double> trace_s;  // seconds of each timed repeat, in run order (raylab compare's test)
+  std::vector<double> trace_s;  // seconds per trace of the set in each timed repeat, in run order (raylab compare's test)
+  // Embree's repeats in the same cell, timed in alternation with trace_s
+  // (repeat i of each saw the machine alike): their ratio is the per-repeat
+  // ratio to Embree.
+  std::vector<double> embree_trace_s;
+  int trace_passes = 1;         // traces of the set per timed repeat (--min-time)
+  double shortest_repeat_s = 0; // the shortest timed repeat as measured (trace_passes traces)
   std::map<std::string, double> extra;  // BuildStats::extra (structure-specific figures)
   // Resident set of the process (from the OS) just before this structure's
   // build, and its peak from then until this record (build, ray sets and
@@ -108,8 +125,28 @@ std::string bench_csv(const std::vector<BenchRecord>& records);
 // reached its cap: leaves may then hold more triangles than the cost model wanted.
 std::string depth_cap_warning(const BuildStats& stats);
 
-// Fixed-width table for the terminal.
+// Fixed-width table for the terminal. The best-Embree columns are shown
+// only when another Embree mode than the reference ran (else they repeat
+// the ratio to Embree).
 std::string format_bench_table(const std::vector<BenchRecord>& records);
+
+// The noise floor of the ratios: single-ray Embree is timed back to back with
+// every structure, so each (scene, ray set, threads) has one Embree timing
+// per cell. Their spread ((max - min) / median) is what the ratios cannot
+// resolve. One line per (scene, ray set, threads) with two or more timings.
+struct EmbreeNoise {
+  std::string scene, ray_set;
+  int threads = 1;
+  size_t timings = 0;
+  double min_mrays = 0, median_mrays = 0, max_mrays = 0;
+  double spread_pct() const { return median_mrays > 0 ? 100.0 * (max_mrays - min_mrays) / median_mrays : 0.0; }
+};
+std::vector<EmbreeNoise> embree_noise(const std::vector<BenchRecord>& records);
+std::string format_embree_noise(const std::vector<EmbreeNoise>& noise);
+
+// Non-empty when some cells' timed repeats lasted under kShortRepeatS: names
+// them (and the remedy, --min-time).
+std::string bench_short_repeat_warning(const std::vector<BenchRecord>& records);
 
 // One line per accelerator: SAH cost, nodes, leaves, depth, bytes per
 // triangle and its structure-specific build figures.

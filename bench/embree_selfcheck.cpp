@@ -77,10 +77,10 @@ std::vector<SelfCheckRow> embree_selfcheck(const Scene& scene, const std::vector
 }
 
 std::string format_selfcheck_table(const std::vector<SelfCheckRow>& rows) {
-  std::string s = fmt::format("{:<24} {:<8} {:>8} {:>10} {:>10} {:>7} {:>9} {:>9}\n", "scene", "rays", "count",
-                              "adapter", "direct", "ratio", "identical", "prep ms");
+  std::string s = fmt::format("{:<24} {:<8} {:>8} {:>10} {:>10} {:>14} {:>9} {:>9}\n", "scene", "rays", "count",
+                              "adapter", "direct", "adapter/direct", "identical", "prep ms");
   for (const auto& r : rows)
-    s += fmt::format("{:<24} {:<8} {:>8} {:>10.2f} {:>10.2f} {:>7.3f} {:>9} {:>9.2f}\n",
+    s += fmt::format("{:<24} {:<8} {:>8} {:>10.2f} {:>10.2f} {:>14.3f} {:>9} {:>9.2f}\n",
                      r.scene.size() > 24 ? r.scene.substr(r.scene.size() - 24) : r.scene, r.ray_set, r.rays, r.adapter_mrays_per_s,
                      r.direct_mrays_per_s, r.ratio, r.identical ? "yes" : "NO", r.prepare_ms);
   return s;

@@ -56,7 +56,9 @@ nlohmann::json report_header(const std::string& command) {
   }
   h["compiler"] = std::string("g++ ") + __VERSION__;
   h["flags"] = RAYLAB_CXX_FLAGS;
-  h["revision"] = git_revision();
+  // null when the binary was built outside a git checkout (not a made-up "unknown").
+  const std::string rev = git_revision();
+  h["revision"] = rev.empty() || rev == "unknown" ? nlohmann::json(nullptr) : nlohmann::json(rev);
   return h;
 }
 

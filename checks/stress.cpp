@@ -33,13 +33,17 @@ class TruthCache {
       : mesh_(mesh), rays_(rays), truth_(rays.size()), known_(rays.size(), 0) {}
 
   // Computes the missing answers for `ids` in parallel (call outside parallel loops over the same ids).
-  void ensure(const std::vector<uint32_t>& ids) {
+  // Once `stop` is set nothing more is computed or marked known.
+  void ensure(const std::vector<uint32_t>& ids, const std::atomic<bool>* stop) {
     std::vector<uint32_t> todo;
     for (uint32_t i : ids)
       if (!known_[i]) todo.push_back(i);
+    auto stopped = [&] { return stop && stop->load(); };
     tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+      if (stopped()) return;
       for (size_t k = r.begin(); k < r.end(); ++k) truth_[todo[k]] = oracle_closest_hit(mesh_, rays_[todo[k]]);
     });
+    if (stopped()) return;
     for (uint32_t i : todo) known_[i] = 1;
   }
   const OracleHit& operator[](uint32_t i) const { return truth_[i]; }
@@ -62,9 +66,10 @@ RaySet subset(const std::vector<Ray>& rays, size_t stride, std::vector<uint32_t>
 }
 
 // One traced run, timed (also the warm-up of the timing runs).
-double timed_trace(const Accelerator& a, const RaySet& set, int threads, TraceOutput& out) {
+double timed_trace(const Accelerator& a, const RaySet& set, int threads, TraceOutput& out,
+                   const std::atomic<bool>* stop) {
   Timer t;
-  trace_set(a, set, threads, out);
+  trace_set(a, set, threads, out, nullptr, nullptr, stop);
   return t.seconds();
 }
 
@@ -159,7 +164,7 @@ StressRun trace_for_stress(const Accelerator& accel, const Accelerator& referenc
     const size_t probe_stride = std::max<size_t>(1, n / 1024);
     const RaySet probe = subset(rays, probe_stride, probe_ids);
     TraceOutput po;
-    const double projected = timed_trace(accel, probe, threads, po) * static_cast<double>(probe_stride);
+    const double projected = timed_trace(accel, probe, threads, po, opt.stop) * static_cast<double>(probe_stride);
     if (projected > opt.time_budget_s) {
       stride = static_cast<size_t>(std::ceil(projected / opt.time_budget_s));
       rec.subsampled = true;
@@ -170,16 +175,16 @@ StressRun trace_for_stress(const Accelerator& accel, const Accelerator& referenc
   rec.rays = set.rays.size();
   // The traced answers, then the timing: the median of 3 runs when they
   // are short (under 0.2 s projected), one run otherwise.
-  const double first_s = timed_trace(accel, set, threads, run.out);
+  const double first_s = timed_trace(accel, set, threads, run.out, opt.stop);
   const int repeats = first_s < 0.2 ? 3 : 1;
-  const double acc_s = time_trace(accel, set, threads, repeats).median_s;
-  const double emb_s = time_trace(reference, set, threads, repeats).median_s;
+  const double acc_s = time_trace(accel, set, threads, repeats, nullptr, 0.0, opt.stop).median_s;
+  const double emb_s = time_trace(reference, set, threads, repeats, nullptr, 0.0, opt.stop).median_s;
   RaySet occ_set = set;
   occ_set.occlusion = true;
-  trace_set(accel, occ_set, threads, run.occ);
+  trace_set(accel, occ_set, threads, run.occ, nullptr, nullptr, opt.stop);
   rec.mrays_per_s = acc_s > 0 ? rec.rays / acc_s * 1e-6 : 0.0;
-  rec.embree_mrays_per_s = emb_s > 0 ? rec.rays / emb_s * 1e-6 : 0.0;
-  rec.ratio = rec.embree_mrays_per_s > 0 ? rec.mrays_per_s / rec.embree_mrays_per_s : 0.0;
+  rec.embree_robust_mrays_per_s = emb_s > 0 ? rec.rays / emb_s * 1e-6 : 0.0;
+  rec.ratio_to_embree_robust = rec.embree_robust_mrays_per_s > 0 ? rec.mrays_per_s / rec.embree_robust_mrays_per_s : 0.0;
   return run;
 }
 
@@ -194,7 +199,8 @@ void dump_wrong(const std::string& scenario, const StressRecord& rec, uint32_t i
 // Disagreements with the reference, screened and then judged by the oracle
 // (classify.h); also the degenerate triangles that must never be hit.
 void count_disagreements(const StressScenario& sc, const std::string& name, const StressRun& run,
-                         const TraceOutput& ref_out, TruthCache& truth, tbb::task_arena& arena, StressRecord& rec) {
+                         const TraceOutput& ref_out, TruthCache& truth, tbb::task_arena& arena, StressRecord& rec,
+                         const std::atomic<bool>* stop) {
   std::vector<uint32_t> disagree;  // positions in the traced subset
   DisagreementCounts counts;
   for (size_t k = 0; k < run.ids.size(); ++k) {
@@ -215,8 +221,9 @@ void count_disagreements(const StressScenario& sc, const std::string& name, cons
   {
     std::vector<uint32_t> need;
     for (uint32_t k : disagree) need.push_back(run.ids[k]);
-    arena.execute([&] { truth.ensure(need); });
+    arena.execute([&] { truth.ensure(need, stop); });
   }
+  if (stop && stop->load()) return;  // the oracle's answers are incomplete: the record is dropped
   const bool dump = std::getenv("RAYLAB_STRESS_DUMP") != nullptr;
   for (uint32_t k : disagree) {
     const uint32_t i = run.ids[k];
@@ -255,7 +262,7 @@ const char* stress_status(const StressRecord& rec, const StressOptions& opt) {
   const bool wrong = rec.raylab_wrong > 0 || rec.occlusion_disagree > 0 || (rec.watertight_test && rec.leaks > 0);
   if (wrong) return "wrong";
   if (rec.leaks > 0) return "leaky";
-  if (rec.subsampled || rec.ratio < opt.slow_ratio) return "slow";
+  if (rec.subsampled || rec.ratio_to_embree_robust < opt.slow_ratio) return "slow";
   return "ok";
 }
 
@@ -281,14 +288,14 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
     auto reference = make_accelerator(opt.reference);
     reference->build(sc.scene.mesh);
     TraceOutput ref_out;
-    trace_set(*reference, RaySet{"stress", false, sc.rays}, threads, ref_out);
+    trace_set(*reference, RaySet{"stress", false, sc.rays}, threads, ref_out, nullptr, nullptr, opt.stop);
 
     // Leak test: the exact answer for every ray aimed from outside.
     if (sc.watertight()) {
       std::vector<uint32_t> outside;
       for (size_t i = 0; i < sc.rays.size(); ++i)
         if (sc.leak_kind[i] == LeakKind::Outside) outside.push_back(static_cast<uint32_t>(i));
-      arena.execute([&] { truth.ensure(outside); });
+      arena.execute([&] { truth.ensure(outside, opt.stop); });
     }
 
     for (const auto& spec_text : stress_specs_for(sc, accel_specs, opt)) {
@@ -304,7 +311,8 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
         continue;
       }
       const StressRun run = trace_for_stress(*accel, *reference, sc.rays, opt, threads, rec);
-      count_disagreements(sc, name, run, ref_out, truth, arena, rec);
+      count_disagreements(sc, name, run, ref_out, truth, arena, rec, opt.stop);
+      if (stopped()) break;  // interrupted inside the record: its counts are partial, it is not kept
       if (sc.watertight()) count_leaks(sc, run, truth, rec);
       rec.status = stress_status(rec, opt);
       emit(rec);

@@ -29,11 +29,13 @@ struct Counts {
 };
 
 // Compares closest hits (and the accelerator's own any-hit answers).
+// `stop` is polled per block: the oracle can take long on many disagreements.
 Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<Hit>& ref, const std::vector<Hit>& got,
-                       const std::vector<uint8_t>& got_occ, double tol) {
+                       const std::vector<uint8_t>& got_occ, double tol, const std::atomic<bool>* stop) {
   return tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, set.rays.size(), 512), Counts{},
       [&](const tbb::blocked_range<size_t>& r, Counts c) {
+        if (stop && stop->load()) return c;
         for (size_t i = r.begin(); i < r.end(); ++i) {
           const Hit& e = ref[i];
           const Hit& a = got[i];
@@ -56,10 +58,11 @@ Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<
 
 // Compares occlusion answers.
 Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vector<uint8_t>& ref,
-                         const std::vector<uint8_t>& got) {
+                         const std::vector<uint8_t>& got, const std::atomic<bool>* stop) {
   return tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, set.rays.size(), 512), Counts{},
       [&](const tbb::blocked_range<size_t>& r, Counts c) {
+        if (stop && stop->load()) return c;
         for (size_t i = r.begin(); i < r.end(); ++i) {
           if (ref[i] == got[i]) continue;
           const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
@@ -86,7 +89,7 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
   const std::vector<RaySet> sets = make_ray_sets(scene, opt.ray_sets, *reference, rso);
 
   std::vector<TraceOutput> ref_out(sets.size());
-  for (size_t s = 0; s < sets.size(); ++s) trace_set(*reference, sets[s], threads, ref_out[s]);
+  for (size_t s = 0; s < sets.size(); ++s) trace_set(*reference, sets[s], threads, ref_out[s], nullptr, nullptr, opt.stop);
 
   std::vector<VerifyRecord> records;
   auto stopped = [&] { return opt.stop && opt.stop->load(); };
@@ -107,20 +110,21 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
       rec.rays = set.rays.size();
       rec.build_ms = bs.build_ms;
       TraceOutput out;
-      trace_set(*accel, set, threads, out);
+      trace_set(*accel, set, threads, out, nullptr, nullptr, opt.stop);
       Counts c;
       tbb::task_arena arena(threads);
       if (set.occlusion) {
-        arena.execute([&] { c = compare_occlusion(scene, set, ref_out[s].occluded, out.occluded); });
+        arena.execute([&] { c = compare_occlusion(scene, set, ref_out[s].occluded, out.occluded, opt.stop); });
       } else {
         RaySet as_occlusion = set;
         as_occlusion.occlusion = true;
         TraceOutput occ;
-        trace_set(*accel, as_occlusion, threads, occ);
+        trace_set(*accel, as_occlusion, threads, occ, nullptr, nullptr, opt.stop);
         arena.execute([&] {
-          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, kTieTolerance);
+          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, kTieTolerance, opt.stop);
         });
       }
+      if (stopped()) break;  // interrupted inside the record: its counts are partial, it is not kept
       rec.hit_miss_disagree = c.d.hit_miss;
       rec.prim_disagree = c.d.prim;
       rec.ties = c.d.ties;
@@ -129,6 +133,7 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
       rec.occlusion_disagree = c.occlusion;
       rec.max_rel_t_err = c.max_rel;
       records.push_back(rec);
+      if (opt.on_record) opt.on_record(rec);
     }
   }
   return records;

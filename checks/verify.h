@@ -34,9 +34,12 @@ struct VerifyOptions {
   int threads = 0;      // 0 = all cores
   std::string reference = "embree:robust=1";
   // Interruption and progress (raylab verify): stop is polled between
-  // records; on_start sees "accel on set" before each, with its index and the total.
+  // records and inside their traces and comparisons, per chunk of rays (a
+  // record interrupted half-way is dropped); on_start sees "accel on set" before each, with its index and the total.
   const std::atomic<bool>* stop = nullptr;
   std::function<void(size_t index, size_t total, const std::string& what)> on_start;
+  // Called with each record as soon as it is finished (raylab verify prints it).
+  std::function<void(const VerifyRecord& record)> on_record;
 };
 
 std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vector<std::string>& accel_specs,

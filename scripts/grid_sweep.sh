@@ -26,7 +26,7 @@ done
 bench() {  # bench NAME ARGS...: one run, table to NAME.txt, records to NAME.json
   local name=$1
   shift
-  "$RAYLAB" bench --threads 1 --repeats "$REPEATS" --quiet --json "$OUT/$name.json" "$@" | tee "$OUT/$name.txt"
+  "$RAYLAB" bench --threads 1 --repeats "$REPEATS" --quiet -o "$OUT/$name.json" "$@" | tee "$OUT/$name.txt"
 }
 
 DENSITIES=0.125,0.25,0.5,1,2,4,8

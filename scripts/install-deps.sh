@@ -14,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev  # googletest alone ships only sources
   libbenchmark-dev   # microbenchmarks
   libcli11-dev       # command line
+  libfreetype-dev fonts-dejavu-core  # labels of the pictures (show, render --aov): FreeType, DejaVu Sans embedded
   libfmt-dev         # formatting
   nlohmann-json3-dev # JSON output and scene files
   libassimp-dev      # mesh import

@@ -57,7 +57,7 @@ for scene in "${scenes[@]}"; do
   name="$(basename "$scene")"
   name="${name%.*}"
   name="${name//[^A-Za-z0-9_-]/_}"
-  cmd="build/raylab render $scene --accel $accel --size $size --spp $spp --out $out/$name.png --quiet"
+  cmd="build/raylab render $scene --accel $accel --size $size --spp $spp -o $out/$name.png --quiet"
   if line="$($cmd 2>&1)"; then
     # "<name>: N triangles (loaded in X ms), bvh built in Y ms, WxH at S spp in T s (...)"
     tris="$(sed -E 's/.*: ([0-9]+) triangles.*/\1/' <<<"$line")"

@@ -24,7 +24,7 @@ inline std::vector<std::string> read_lines(const std::filesystem::path& p) {
   return lines;
 }
 
-// `raylab ARGS --json <fresh temp dir>/out.json`: the command's result and
+// `raylab ARGS -o <fresh temp dir>/out.json`: the command's result and
 // its report (null when none was written).
 struct JsonRun {
   CommandResult result;
@@ -33,7 +33,7 @@ struct JsonRun {
 inline JsonRun run_raylab_json(const std::string& name, const std::string& args) {
   const auto dir = temp_dir(name);
   const auto path = dir / "out.json";
-  JsonRun run{run_raylab(args + " --json " + path.string()), nullptr};
+  JsonRun run{run_raylab(args + " -o " + path.string()), nullptr};
   if (std::filesystem::exists(path)) run.report = read_json(path);
   std::filesystem::remove_all(dir);
   return run;

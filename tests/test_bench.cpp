@@ -1,6 +1,6 @@
 // `raylab bench` reports: the JSON schema, consistency of a tiny run (every
 // accelerator x every ray set, ratios against the same run's Embree, CSV rows),
-// presets and --scale, incremental records and interruption, `render --json`,
+// presets and --scale, incremental records and interruption, `render --timings`,
 // and bench/plot.py on the tiny report.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -38,7 +38,7 @@ class TinyBench : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new fs::path(test::temp_dir("bench_tiny"));
     const auto r = test::run_raylab("bench --scene soup:n=300 --accel embree,bvh,grid --ray-sets primary,diffuse,shadow,random "
-                                    "--size 24x24 --rays 1500 --repeats 2 --threads 1 --quiet --json " +
+                                    "--size 24x24 --rays 1500 --repeats 2 --min-time 0 --threads 1 --quiet -o " +
                                     (*dir_ / "tiny.json").string());
     exit_code_ = r.exit_code;
     output_ = new std::string(r.output);
@@ -84,8 +84,12 @@ TEST_F(TinyBench, HeaderAndRecordsHaveTheSchema) {
       else EXPECT_TRUE(rec.at(key).is_number()) << key << " " << rec.dump();
     }
     ASSERT_TRUE(rec.at("trace_s").is_array());
-    EXPECT_EQ(rec["trace_s"].size(), 2u);  // --repeats 2
+    EXPECT_EQ(rec["trace_s"].size(), 2u);  // --repeats 2 --min-time 0
     for (const auto& t : rec["trace_s"]) EXPECT_GT(t.get<double>(), 0.0);
+    // Embree's repeats, timed in alternation with the structure's.
+    ASSERT_TRUE(rec.at("embree_trace_s").is_array());
+    EXPECT_EQ(rec["embree_trace_s"].size(), 2u);
+    EXPECT_EQ(rec["trace_passes"], 1);  // --min-time 0: one trace per repeat
     EXPECT_TRUE(rec.at("sah_cost").is_number() || rec.at("sah_cost").is_null());
     EXPECT_EQ(rec["triangles"], 300);
     EXPECT_EQ(rec["threads"], 1);
@@ -173,9 +177,45 @@ TEST_F(TinyBench, PlotScriptWritesThePngs) {
   EXPECT_THAT(ss.str(), HasSubstr("| soup:n=300 | 300 | bvh |"));
 }
 
+TEST(Bench, MinTimeRepeatsAShortSetUntilARepeatLastsLongEnough) {
+  // 400 random rays on 200 triangles trace in well under a millisecond: with
+  // --min-time 0.03 each timed repeat traces the set many times and lasts
+  // about 30 ms; trace_s stays the time per trace (Mrays/s unchanged in meaning).
+  const auto dir = test::temp_dir("bench_min_time");
+  const auto r = test::run_raylab("bench soup:n=200 --accel embree,bvh --ray-sets random --rays 400 --repeats 3 "
+                                  "--min-time 0.03 -t 1 -o " + (dir / "b.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, ::testing::Not(HasSubstr("warning:")));
+  const auto j = read_json(dir / "b.json");
+  EXPECT_EQ(j["options"]["min_time_s"], 0.03);
+  for (const auto& rec : j["records"]) {
+    const int passes = rec["trace_passes"];
+    EXPECT_GT(passes, 5) << rec.dump();
+    // Calibrated to last min_time (the clock is the thread's CPU time, so a loaded machine does not shorten it).
+    EXPECT_GE(rec["shortest_repeat_s"].get<double>(), 0.5 * 0.03) << rec.dump();
+    for (const auto& t : rec["trace_s"])
+      EXPECT_NEAR(t.get<double>() * passes, rec["shortest_repeat_s"].get<double>(),
+                  rec["shortest_repeat_s"].get<double>()) << rec.dump();
+    EXPECT_NEAR(rec["mrays_per_s"].get<double>(), 400 / rec["trace_s"][1].get<double>() * 1e-6,
+                0.5 * rec["mrays_per_s"].get<double>());
+  }
+  // The noise floor: Embree's speed over its timings with each structure.
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("noise floor: single-ray Embree timed"));
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("embree random +t1 +2 timings: .* spread [0-9.]+ %"));
+}
+
+TEST(Bench, RepeatsUnderTenMillisecondsAreNamedInAWarning) {
+  const auto r = test::run_raylab("bench soup:n=200 --accel embree,bvh --ray-sets random --rays 400 --repeats 2 "
+                                  "--min-time 0 -t 1 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("warning: 2 cells timed in repeats under 10 ms"));
+  EXPECT_THAT(r.output, ::testing::ContainsRegex("bvh random t1 \\([0-9.e-]+ ms\\)"));
+  EXPECT_THAT(r.output, HasSubstr("raise --min-time"));
+}
+
 TEST(Bench, ScaleAndSeveralScenes) {
   const auto [r, j] = test::run_raylab_json("bench_scale", "bench --scale soup:n=100,400 --scene cornell --accel "
-                                            "embree,bvh --ray-sets random --rays 500 --repeats 1 --threads 1 --quiet");
+                                            "embree,bvh --ray-sets random --rays 500 --repeats 1 --min-time 0 --threads 1 --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::multiset<size_t> tris;
   for (const auto& rec : j["records"]) tris.insert(rec["triangles"].get<size_t>());
@@ -185,7 +225,7 @@ TEST(Bench, ScaleAndSeveralScenes) {
 
 TEST(Bench, BruteIsSkippedAboveItsTriangleLimit) {
   const auto [r, j] = test::run_raylab_json("bench_brute", "bench --scene soup:n=50 --scene soup:n=200 --accel "
-                                            "brute,bvh --ray-sets random --rays 300 --repeats 1 --threads 1 "
+                                            "brute,bvh --ray-sets random --rays 300 --repeats 1 --min-time 0 --threads 1 "
                                             "--brute-max-tris 100");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("brute skipped"));
@@ -202,13 +242,13 @@ TEST(Bench, BadPresetsAndOptionsExitWith2) {
     std::string args, message;
   };
   const std::vector<Case> cases = {
-      {"bench --preset nope --json " + json, "unknown preset 'nope'"},
-      {"bench --frobnicate --json " + json, "frobnicate"},
-      {"bench --scale soup --json " + json, "expected FAMILY:PARAM=v1,v2"},
-      {"bench --scale soup:n= --json " + json, "expected FAMILY:PARAM=v1,v2"},
-      {"bench --scale soup:n=1x --json " + json, "not an integer"},
-      {"bench --preset quick --repeats 0 --json " + json, "repeats"},
-      {"bench --build-repeats 0 --json " + json, "build-repeats"},
+      {"bench --preset nope -o " + json, "unknown preset 'nope'"},
+      {"bench --frobnicate -o " + json, "frobnicate"},
+      {"bench --scale soup -o " + json, "expected FAMILY:PARAM=v1,v2"},
+      {"bench --scale soup:n= -o " + json, "expected FAMILY:PARAM=v1,v2"},
+      {"bench --scale soup:n=1x -o " + json, "not an integer"},
+      {"bench --preset quick --repeats 0 --min-time 0 -o " + json, "repeats"},
+      {"bench --build-repeats 0 -o " + json, "build-repeats"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_raylab(c.args);
@@ -252,8 +292,8 @@ TEST(Bench, SigintKeepsTheFinishedRecords) {
     dup2(devnull, 1);
     dup2(devnull, 2);
     execl(RAYLAB_BINARY, RAYLAB_BINARY, "bench", "--scene", "soup:n=500", "--accel", "embree,bvh,kdtree,grid,hashgrid,grid2",
-          "--ray-sets", "primary,random", "--size", "32x32", "--rays", "2000", "--repeats", "200", "--threads", "1",
-          "--json", json.c_str(), static_cast<char*>(nullptr));
+          "--ray-sets", "primary,random", "--size", "32x32", "--rays", "2000", "--repeats", "200", "--min-time", "0", "--threads", "1",
+          "-o", json.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
   // Wait for the first finished record, then interrupt.
@@ -283,10 +323,10 @@ TEST(Bench, SigintKeepsTheFinishedRecords) {
   fs::remove_all(dir);
 }
 
-TEST(Bench, RenderJsonHasTheTimings) {
+TEST(Bench, RenderTimingsRecordHasTheTimings) {
   const auto dir = test::temp_dir("render_json");
   const auto r = test::run_raylab("render --scene cornell --spp 1 --size 16x16 --quiet --out " + (dir / "c.pfm").string() +
-                                  " --json " + (dir / "c.json").string());
+                                  " --timings " + (dir / "c.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = read_json(dir / "c.json");
   ASSERT_EQ(j["records"].size(), 1u);

@@ -116,7 +116,7 @@ TEST(BenchMemory, BuildFailureIsASkipAndTheMatrixGoesOn) {
 // The same through the command line: exit 0, the skips in the JSON.
 TEST(BenchMemory, CommandLineWritesSkipsToTheJson) {
   const auto [r, j] = test::run_raylab_json("bench_memory_skip", "bench --scene soup:n=500 --accel bvh --ray-sets "
-                                            "random --rays 100 --repeats 1 --threads 1 --memory-headroom 0.000000000001");
+                                            "random --rays 100 --repeats 1 --min-time 0 --threads 1 --memory-headroom 0.000000000001");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("bvh skipped: the Embree reference needs ~"));
   EXPECT_TRUE(j.at("records").empty());

@@ -86,7 +86,7 @@ TEST(Cli, RenderIsDeterministicAcrossThreadCounts) {
 TEST(Cli, VerifyReportsZeroDisagreementsAndWritesJson) {
   const auto dir = test::temp_dir("cli_verify");
   const auto json = dir / "v.json";
-  const auto r = test::run_raylab("verify --scene cornell --accel bvh,brute --rays 5000 --json " + json.string());
+  const auto r = test::run_raylab("verify --scene cornell --accel bvh,brute --rays 5000 -o " + json.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(json);
   const auto j = nlohmann::json::parse(in);
@@ -108,7 +108,7 @@ TEST(Cli, BenchWritesRecordsWithRatiosToEmbreeFromTheSameRun) {
   const auto dir = test::temp_dir("cli_bench");
   const auto json = dir / "b.json";
   const auto r = test::run_raylab("bench --scene soup:n=2000 --accel embree,bvh --ray-sets primary,random,shadow,diffuse "
-                                  "--size 64x64 --rays 4000 --repeats 2 --threads 1,2 --quiet --json " +
+                                  "--size 64x64 --rays 4000 --repeats 2 --min-time 0 --threads 1,2 --quiet -o " +
                                   json.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(json);

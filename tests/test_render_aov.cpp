@@ -77,6 +77,32 @@ TEST(RenderAov, ContactSheetOverSeveralStructures) {
   for (int x = 0; x < te.width; ++x) EXPECT_GT(te.pixel(x, 0).x(), 0.0f);
 }
 
+TEST(RenderAov, ASheetSharesALogScaleUnlessEachTileGetsItsOwn) {
+  // One structure's costs (brute tests all 300 triangles per ray) would
+  // saturate a shared linear scale for the others: a sheet defaults to one
+  // log scale, and --aov-scale each gives every tile its own.
+  const auto dir = test::temp_dir("aov_scale");
+  const auto shared = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 -o " +
+                                       (dir / "s.png").string());
+  ASSERT_EQ(shared.exit_code, 0) << shared.output;
+  EXPECT_THAT(shared.output, HasSubstr("(colours: one log scale, 0 to 300)"));
+  const auto each = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 --aov-scale each -o " +
+                                     (dir / "e.png").string());
+  ASSERT_EQ(each.exit_code, 0) << each.output;
+  EXPECT_THAT(each.output, HasSubstr("(colours: each tile its own linear scale)"));
+  const auto linear = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 --aov-scale linear -o " +
+                                       (dir / "l.png").string());
+  EXPECT_THAT(linear.output, HasSubstr("(colours: one linear scale, 0 to 300)"));
+  std::ifstream a(dir / "s.png", std::ios::binary), b(dir / "e.png", std::ios::binary);
+  EXPECT_NE(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+  const auto bad = test::run_raylab("render soup:n=30 --accel bvh --aov tris --aov-scale wide -o " + (dir / "x.png").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.output, HasSubstr("use auto, log, linear or each"));
+  const auto no_aov = test::run_raylab("render soup:n=30 --aov-scale log -o " + (dir / "y.png").string());
+  EXPECT_EQ(no_aov.exit_code, 2);
+  EXPECT_THAT(no_aov.output, HasSubstr("--aov pictures only"));
+}
+
 TEST(RenderAov, BadInput) {
   const auto dir = test::temp_dir("aov_bad");
   const auto a = test::run_raylab("render soup:n=10 --aov depth -o " + (dir / "a.png").string());

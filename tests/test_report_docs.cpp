@@ -38,10 +38,10 @@ TEST(ReportDocs, EveryReportHasTheSchemaVersionAndEveryKeyIsDocumented) {
   ASSERT_GT(docs.size(), 50u) << "docs/json-reports.md missing or empty";
   const auto dir = test::temp_dir("report_docs");
   const std::map<std::string, std::string> runs = {
-      {"render", "render soup:n=50 -s 1 --size 8x8 -q -o " + (dir / "r.png").string() + " --json " + (dir / "render.json").string()},
+      {"render", "render soup:n=50 -s 1 --size 8x8 -q -o " + (dir / "r.png").string() + " --timings " + (dir / "render.json").string()},
       {"verify", "verify soup:n=50 --accel bvh --rays 64 -q -o " + (dir / "verify.json").string()},
       {"stress", "stress --scenario single --accel bvh -q -o " + (dir / "stress.json").string()},
-      {"bench", "bench soup:n=50 --accel embree,bvh --ray-sets random --rays 64 --repeats 2 -t 1 -q -o " +
+      {"bench", "bench soup:n=50 --accel embree,bvh --ray-sets random --rays 64 --repeats 2 --min-time 0 -t 1 -q -o " +
                     (dir / "bench.json").string()},
   };
   for (const auto& [command, args] : runs) {
@@ -57,7 +57,7 @@ TEST(ReportDocs, EveryReportHasTheSchemaVersionAndEveryKeyIsDocumented) {
         EXPECT_TRUE(docs.count(key)) << command << " record key '" << key << "' is not in docs/json-reports.md";
   }
   // compare's own report.
-  const auto c = test::run_raylab("compare " + (dir / "bench.json").string() + " " + (dir / "bench.json").string() + " --json -");
+  const auto c = test::run_raylab("compare " + (dir / "bench.json").string() + " " + (dir / "bench.json").string() + " -o -");
   ASSERT_EQ(c.exit_code, 0) << c.output;
   const auto cj = nlohmann::json::parse(c.output);
   EXPECT_EQ(cj.at("schema_version"), kReportSchemaVersion);

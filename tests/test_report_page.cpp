@@ -35,16 +35,17 @@ class ReportPage : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new fs::path(test::temp_dir("report_page"));
     const fs::path d = *dir_ / "run";
-    fs::create_directories(d);
+    fs::create_directories(d / "heatmaps");  // output directories must exist (raylab creates none)
+    fs::create_directories(d / "structures");
     const std::string q = " -q -t 1 ";
     const std::vector<std::string> runs = {
         "bench soup:n=300 --accel embree,bvh,kdtree,grid --ray-sets primary,random --size 16x16 --rays 400 "
-        "--repeats 2" + q + "-o " + (d / "bench.json").string(),
+        "--repeats 2 --min-time 0" + q + "-o " + (d / "bench.json").string(),
         "verify soup:n=300 --accel bvh,grid --rays 200" + q + "-o " + (d / "verify.json").string(),
         "stress --scenario single --accel bvh,grid" + q + "-o " + (d / "stress.json").string(),
         "render soup:n=300 --accel bvh,grid --aov tris --size 20x20 -o " + (d / "heatmaps" / "soup_tris.png").string(),
         "show soup:n=300 --accel bvh --size 24x24 -o " + (d / "structures" / "bvh.png").string(),
-        "bench soup:n=300 --accel grid --sweep density=0.5,2 --ray-sets primary --size 16x16 --repeats 1" + q +
+        "bench soup:n=300 --accel grid --sweep density=0.5,2 --ray-sets primary --size 16x16 --repeats 1 --min-time 0" + q +
             "-o " + (d / "sweep_density.json").string(),
         "PLOT",
         "report " + d.string() + " -o " + (*dir_ / "report.html").string(),
@@ -105,6 +106,29 @@ TEST_F(ReportPage, ChartsTablesPlotsAndHeadlessChromium) {
   const auto bench = nlohmann::json::parse(slurp(*dir_ / "run" / "bench.json"));
   EXPECT_THAT(html, HasSubstr(bench["revision"].get<std::string>()));
   EXPECT_THAT(html, HasSubstr(bench["embree_version"].get<std::string>()));
+  // Bars grow from zero on linear axes: every bar of the report's own charts
+  // starts at the axis (x = 190), none on a log scale; no column repeats
+  // another (no other Embree mode ran, so no "ratio to best Embree mode");
+  // honest labels; no placeholder in the footer.
+  for (size_t p = 0; (p = html.find("<svg xmlns=\"http://www.w3.org/2000/svg\" id=\"chart-", p)) != std::string::npos; ++p) {
+    const std::string svg = html.substr(p, html.find("</svg>", p) - p);
+    EXPECT_THAT(svg, Not(HasSubstr("log scale"))) << svg.substr(0, 120);
+    for (size_t q = 0; (q = svg.find("<rect x=\"", q)) != std::string::npos; ++q) {
+      const std::string x = svg.substr(q + 9, svg.find('"', q + 9) - q - 9);
+      EXPECT_EQ(x, "190.0") << svg.substr(q, 120);
+    }
+  }
+  EXPECT_THAT(html, Not(HasSubstr("ratio to best Embree mode")));
+  EXPECT_THAT(html, HasSubstr("max relative distance difference from Embree"));
+  EXPECT_THAT(html, Not(HasSubstr("max relative distance error")));
+  const std::string footer = html.substr(html.find("<footer"));
+  EXPECT_THAT(footer, Not(HasSubstr("unknown")));
+  EXPECT_THAT(footer, Not(HasSubstr("?")));
+  EXPECT_THAT(footer, HasSubstr("Machine: "));
+  // The files it read, listed.
+  EXPECT_THAT(html, HasSubstr("id=\"table-files\""));
+  for (const char* f : {"<td>bench.json</td>", "<td>verify.json</td>", "<td>stress.json</td>", "<td>sweep_density.json</td>"})
+    EXPECT_THAT(html, HasSubstr(f)) << f;
   // The Markdown version with its headline block and chart files.
   const std::string md = slurp(*dir_ / "report.md");
   EXPECT_THAT(md, HasSubstr("<!-- headline:begin -->"));

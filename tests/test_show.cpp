@@ -7,6 +7,10 @@
 #include <fstream>
 #include <regex>
 
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
 #include "tests/test_util.h"
 #include "tracer/image.h"
 
@@ -93,6 +97,35 @@ TEST(Show, EveryStructureHasAPicture) {
   }
 }
 
+TEST(Show, ThePngHasATitleAndADepthLegendAtAReadableDefaultSize) {
+  // show once drew at the study's 160 px with a 5x7 font: labels cut ("k-d sp"),
+  // no legend for the depth colours, depth 3 by default where the docs use 4.
+  const auto dir = test::temp_dir("show_legend");
+  const auto r = test::run_raylab("show soup:n=200 --accel kdtree -o " + (dir / "k.png").string() + " -o " +
+                                  (dir / "k.pfm").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("(depth <= 4)"));
+  const Image overlay = read_pfm((dir / "k.pfm").string());
+  EXPECT_GE(overlay.width, 480);
+  int w = 0, h = 0, n = 0;
+  unsigned char* px = stbi_load((dir / "k.png").string().c_str(), &w, &h, &n, 3);
+  ASSERT_NE(px, nullptr);
+  EXPECT_EQ(w, overlay.width);
+  EXPECT_GT(h, overlay.height + 30) << "the title above and the legend below";
+  // The legend band below the overlay holds the depth colours: yellow (depth 0) to blue (deepest).
+  const int band = h - 30;
+  bool yellow = false, blue = false;
+  for (int y = band; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const unsigned char* p = px + 3 * (static_cast<size_t>(y) * w + x);
+      yellow |= p[0] > 200 && p[1] > 180 && p[2] < 120;
+      blue |= p[2] > 200 && p[0] < 120;
+    }
+  stbi_image_free(px);
+  EXPECT_TRUE(yellow) << "no depth-0 swatch";
+  EXPECT_TRUE(blue) << "no deepest-level swatch";
+}
+
 TEST(Show, BadInputIsRejectedBeforeWriting) {
   const auto dir = test::temp_dir("show_bad");
   const std::string out = (dir / "x.ply").string();
@@ -106,6 +139,7 @@ TEST(Show, BadInputIsRejectedBeforeWriting) {
       {"show soup:n=10 --accel bvh --depth -1 -o " + out, "depth"},
       {"show no_such_scene_file.ply --accel bvh -o " + out, "no_such_scene_file"},
       {"show soup:n=10 --accel bvh", "--out"},
+      {"show soup:n=10 --accel bvh -o " + (dir / "missing" / "x.png").string(), "does not exist"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_raylab(c.args);

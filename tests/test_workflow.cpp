@@ -33,16 +33,16 @@ Shell sh(const std::string& command) { return test::run_shell(command + " 2>&1")
 
 const std::string kSource = RAYLAB_SOURCE_DIR;
 const std::string kCommon =
-    " --scene 'soup:n=400;terrain:n=8' --ray-sets primary,random --size 16x16 --rays 300 --repeats 1 --quiet";
+    " --scene 'soup:n=400;terrain:n=8' --ray-sets primary,random --size 16x16 --rays 300 --repeats 1 --min-time 0 --quiet";
 
 TEST(Workflow, MergedCellsEqualOneRunOverTheMatrix) {
   const auto dir = test::temp_dir("workflow_merge");
   const std::string bin = RAYLAB_BINARY;
-  ASSERT_EQ(sh(bin + " bench --accel embree,bvh,grid --threads 1" + kCommon + " --json " + (dir / "one.json").string()).exit_code, 0);
+  ASSERT_EQ(sh(bin + " bench --accel embree,bvh,grid --threads 1" + kCommon + " -o " + (dir / "one.json").string()).exit_code, 0);
   std::string cells;
   for (const char* accel : {"embree", "bvh", "grid"}) {
     const auto cell = dir / (std::string(accel) + ".json");
-    ASSERT_EQ(sh(bin + " bench --accel " + accel + " --threads 1" + kCommon + " --json " + cell.string()).exit_code, 0);
+    ASSERT_EQ(sh(bin + " bench --accel " + accel + " --threads 1" + kCommon + " -o " + cell.string()).exit_code, 0);
     cells += " " + cell.string();
   }
   const auto merged = dir / "merged.json";

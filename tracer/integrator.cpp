@@ -44,10 +44,12 @@ class TileRenderer {
 
   // Renders pixels [x0,x1) x [y0,y1) into img.
   void render_tile(int x0, int x1, int y0, int y1, Image& img, uint64_t& rays, uint64_t& shadow_rays) const {
+    if (s_.stop && s_.stop->load(std::memory_order_relaxed)) return;  // before the tile's sample buffer is made
     const int tw = x1 - x0, th = y1 - y0;
     const size_t total = static_cast<size_t>(tw) * th * s_.spp;
     std::vector<Vec3f> sample_radiance(total, Vec3f::Zero());
     for (size_t first = 0; first < total; first += kMaxPathsPerBatch) {
+      if (s_.stop && s_.stop->load(std::memory_order_relaxed)) return;
       const size_t count = std::min(kMaxPathsPerBatch, total - first);
       std::vector<Path> paths;
       std::vector<Ray> rays_batch;
@@ -268,6 +270,7 @@ RenderResult render(const Scene& scene, const Accelerator& accel, const RenderSe
   result.seconds = timer.seconds();
   result.rays = rays.load();
   result.shadow_rays = shadow_rays.load();
+  result.complete = !(settings.stop && settings.stop->load());
   return result;
 }
 

@@ -10,6 +10,7 @@
 // stream derived from (seed, pixel, sample) and each pixel sums its samples
 // in sample order, so the same seed gives the same image bytes whatever the
 // thread count.
+#include <atomic>
 #include <cstdint>
 
 #include "accel/accelerator.h"
@@ -26,6 +27,9 @@ struct RenderSettings {
   int rr_depth = 3;            // Russian roulette starts after this many bounces
   uint64_t seed = 1;
   bool progress = false;       // progress line on stderr for renders longer than a second
+  // Ctrl-C: polled before every batch of paths; once set, the remaining work
+  // is skipped and the result is marked incomplete.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct RenderResult {
@@ -33,6 +37,7 @@ struct RenderResult {
   double seconds = 0.0;
   uint64_t rays = 0;           // closest-hit rays traced
   uint64_t shadow_rays = 0;    // occlusion rays traced
+  bool complete = true;        // false when `stop` ended the render early (the image is partial)
 };
 
 RenderResult render(const Scene& scene, const Accelerator& accel, const RenderSettings& settings);

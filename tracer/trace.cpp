@@ -26,13 +26,14 @@ PreparedSet prepare_set(const Accelerator& accel, const RaySet& set) {
 }
 
 void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOutput& out, TraversalStats* stats,
-               const PreparedRays* prepared) {
+               const PreparedRays* prepared, const std::atomic<bool>* stop) {
   const size_t n = set.rays.size();
   if (set.occlusion) out.occluded.resize(n);
   else out.hits.resize(n);
   const size_t chunks = (n + kChunk - 1) / kChunk;
   std::vector<TraversalStats> per_chunk(stats ? chunks : 0);
   auto trace_chunk = [&](size_t c) {
+    if (stop && stop->load(std::memory_order_relaxed)) return;
     const size_t b = c * kChunk, e = std::min(n, b + kChunk);
     const std::span<const Ray> rays(set.rays.data() + b, e - b);
     TraversalStats* s = stats ? &per_chunk[c] : nullptr;
@@ -66,33 +67,96 @@ TraceTiming summarize_times(std::vector<double> times) {
   return timing;
 }
 
-TraceTiming time_trace(const Accelerator& accel, const RaySet& set, int threads, int repeats,
-                       const PreparedRays* prepared) {
-  PreparedSet own;
-  if (!prepared) {
-    own = prepare_set(accel, set);
-    prepared = own.rays.get();
-  }
-  TraceOutput out;
-  trace_set(accel, set, threads, out, nullptr, prepared);  // warm-up: caches, page faults, TBB workers
-  std::vector<double> times;
-  // One thread: the loop runs on this thread, so its CPU time is the trace's
-  // cost, immune to waiting for a core on a loaded machine. More threads:
-  // wall time, since that is what parallel scaling is about.
-  for (int i = 0; i < std::max(1, repeats); ++i) {
-    if (threads <= 1) {
-      ThreadCpuTimer t;
-      trace_set(accel, set, 1, out, nullptr, prepared);
-      times.push_back(t.seconds());
-    } else {
-      Timer t;
-      trace_set(accel, set, threads, out, nullptr, prepared);
-      times.push_back(t.seconds());
+namespace {
+
+// Timed runs of one accelerator on one set: each run traces the set `passes`
+// times. One thread: the loop runs on this thread, so its CPU time is the
+// trace's cost, immune to waiting for a core on a loaded machine. More
+// threads: wall time, since that is what parallel scaling is about.
+class TimedRuns {
+ public:
+  TimedRuns(const Accelerator& accel, const RaySet& set, int threads, const PreparedRays* prepared,
+            const std::atomic<bool>* stop)
+      : accel_(accel), set_(set), threads_(threads), stop_(stop) {
+    prepared_ = prepared;
+    if (!prepared_) {
+      own_ = prepare_set(accel, set);
+      prepared_ = own_.rays.get();
     }
   }
-  TraceTiming timing = summarize_times(std::move(times));
-  timing.prepare_s = own.prepare_s;
-  return timing;
+  bool stopped() const { return stop_ && stop_->load(); }
+
+  // Warm-up (caches, page faults, TBB workers), then untimed calibration
+  // runs, as Google Benchmark's: the pass count grows until one run lasts
+  // min_time_s (the cold first run is slower than the rest, so its time
+  // alone would give too few passes).
+  void calibrate(double min_time_s) {
+    constexpr int kMaxPasses = 1'000'000;
+    double run_s = run(1);
+    while (min_time_s > 0 && run_s < min_time_s && passes_ < kMaxPasses && !stopped()) {
+      const double per_pass = std::max(run_s / passes_, 1e-9);
+      const double wanted = std::ceil(1.2 * min_time_s / per_pass);  // a margin over the estimate
+      passes_ = static_cast<int>(std::clamp(wanted, passes_ + 1.0, std::min<double>(kMaxPasses, 1000.0 * passes_)));
+      run_s = run(passes_);
+    }
+  }
+  // One timed repeat, kept as seconds per trace of the set.
+  void repeat() {
+    const double s = run(passes_);
+    shortest_ = times_.empty() ? s : std::min(shortest_, s);
+    times_.push_back(s / passes_);
+  }
+  TraceTiming timing() const {
+    TraceTiming t = summarize_times(times_);
+    t.passes = passes_;
+    t.repeat_wall_s = shortest_;
+    t.prepare_s = own_.prepare_s;
+    t.stopped = stopped();
+    return t;
+  }
+
+ private:
+  double run(int passes) {
+    ThreadCpuTimer cpu;
+    Timer wall;
+    for (int p = 0; p < passes && !stopped(); ++p) trace_set(accel_, set_, threads_, out_, nullptr, prepared_, stop_);
+    return threads_ <= 1 ? cpu.seconds() : wall.seconds();
+  }
+
+  const Accelerator& accel_;
+  const RaySet& set_;
+  int threads_;
+  const std::atomic<bool>* stop_;
+  const PreparedRays* prepared_ = nullptr;
+  PreparedSet own_;
+  TraceOutput out_;
+  int passes_ = 1;
+  double shortest_ = 0;
+  std::vector<double> times_;
+};
+
+}  // namespace
+
+TraceTiming time_trace(const Accelerator& accel, const RaySet& set, int threads, int repeats,
+                       const PreparedRays* prepared, double min_time_s, const std::atomic<bool>* stop) {
+  TimedRuns runs(accel, set, threads, prepared, stop);
+  runs.calibrate(min_time_s);
+  for (int i = 0; i < std::max(1, repeats) && !runs.stopped(); ++i) runs.repeat();
+  return runs.timing();
+}
+
+std::pair<TraceTiming, TraceTiming> time_trace_alternating(const Accelerator& a, const PreparedRays* prepared_a,
+                                                           const Accelerator& b, const PreparedRays* prepared_b,
+                                                           const RaySet& set, int threads, int repeats,
+                                                           double min_time_s, const std::atomic<bool>* stop) {
+  TimedRuns ra(a, set, threads, prepared_a, stop), rb(b, set, threads, prepared_b, stop);
+  rb.calibrate(min_time_s);
+  ra.calibrate(min_time_s);
+  for (int i = 0; i < std::max(1, repeats) && !ra.stopped(); ++i) {
+    rb.repeat();
+    ra.repeat();
+  }
+  return {ra.timing(), rb.timing()};
 }
 
 }  // namespace raylab

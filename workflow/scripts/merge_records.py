@@ -10,7 +10,8 @@ if every cell completed, the records in the order one run writes them (scene, ac
 ray set, thread count) and every cell's skips; OUT.csv the matching CSV rows, copied from the
 cells' CSVs as raylab wrote them (so the columns follow raylab's, whatever they are). When the
 records carry best-Embree figures (ratio_to_best_embree), they are recomputed over all cells,
-since a cell only sees the Embree modes it ran.
+since a cell only sees the Embree modes it ran. "merged_from" lists the cell files (relative to
+OUT.json), so `raylab report`, which reads a folder recursively, skips them.
 """
 import argparse
 import csv
@@ -108,6 +109,10 @@ def main():
     merged["options"] = merged_options
     merged["complete"] = all(rep.get("complete", False) for rep in reports)
     merged["cells"] = len(reports)
+    # The cell files this report holds, relative to it: `raylab report` reads a folder
+    # recursively and must not count their records twice.
+    out_dir = os.path.dirname(os.path.abspath(a.out))
+    merged["merged_from"] = [os.path.relpath(os.path.abspath(p), out_dir) for p in a.cells]
     merged["skipped"] = [s for rep in reports for s in rep.get("skipped", [])]
     merged["records"] = [records[i] for i in order]
     if merged["records"] and "ratio_to_best_embree" in merged["records"][0]:
