@@ -17,7 +17,7 @@
 
 #include "accel/bsp/convex_polytope.h"
 #include "accel/core/sah_report.h"
-#include "accel/kdtree/clip_triangle.h"  // kd_detail::next_down / next_up
+#include "accel/core/clip_triangle.h"  // kd_detail::next_down / next_up
 
 namespace raylab {
 

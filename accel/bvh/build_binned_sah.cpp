@@ -16,7 +16,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "accel/bvh/sah_binning.h"
 #include "accel/bvh/small_sweep.h"
 

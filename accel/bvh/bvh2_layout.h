@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "accel/bvh/collapse_wide.h"
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "accel/bvh/traverse_bvh2.h"
 #include "base/triangle_mesh.h"
 

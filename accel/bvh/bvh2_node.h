@@ -6,7 +6,7 @@
 #include <span>
 #include <vector>
 
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "accel/core/sah_report.h"
 #include "base/aabb.h"
 

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "accel/bvh/collapse_wide.h"
-#include "accel/bvh/huge_page_allocator.h"
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/huge_page_allocator.h"
+#include "accel/core/simd/triangle_block.h"
 #include "base/triangle_mesh.h"
 
 namespace raylab {

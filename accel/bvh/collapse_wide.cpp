@@ -1,6 +1,6 @@
 #include "accel/bvh/collapse_wide.h"
 
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 
 #include <algorithm>
 #include <array>

@@ -10,7 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "base/timer.h"
 
 namespace raylab {

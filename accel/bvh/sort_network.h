@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include "accel/bvh/simd.h"
+#include "accel/core/simd/simd.h"
 #include "accel/core/slab_test.h"
 
 namespace raylab {

@@ -47,7 +47,7 @@
 #include "accel/bvh/quantized_node.h"
 #include "accel/core/hit_recorder.h"
 #include "accel/bvh/sort_network.h"
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/core/slab_test.h"
 
 namespace raylab {

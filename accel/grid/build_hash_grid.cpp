@@ -11,10 +11,10 @@
 #include <tbb/parallel_sort.h>
 
 #include "accel/grid/cell_blocks.h"
-#include "accel/grid/cell_overlap.h"
+#include "accel/core/grid/cell_overlap.h"
 #include "accel/grid/exclusive_scan.h"
 #include "accel/grid/grid_build_start.h"
-#include "accel/grid/grid_stats.h"
+#include "accel/core/grid/grid_stats.h"
 
 namespace raylab {
 

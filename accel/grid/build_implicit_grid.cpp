@@ -5,7 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/grid/grid_build_start.h"
-#include "accel/grid/grid_stats.h"
+#include "accel/core/grid/grid_stats.h"
 #include "accel/grid/implicit_grid.h"
 
 namespace raylab {

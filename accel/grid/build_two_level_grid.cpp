@@ -10,9 +10,9 @@
 #include <tbb/parallel_for.h>
 
 #include "accel/grid/cell_blocks.h"
-#include "accel/grid/cell_lists.h"
+#include "accel/core/grid/cell_lists.h"
 #include "accel/grid/grid_build_start.h"
-#include "accel/grid/grid_stats.h"
+#include "accel/core/grid/grid_stats.h"
 
 namespace raylab {
 

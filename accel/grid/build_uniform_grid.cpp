@@ -8,7 +8,7 @@
 #include "accel/grid/cell_blocks.h"
 #include "accel/grid/cell_clearance.h"
 #include "accel/grid/grid_build_start.h"
-#include "accel/grid/grid_stats.h"
+#include "accel/core/grid/grid_stats.h"
 
 namespace raylab {
 

@@ -19,7 +19,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 #include "base/triangle_mesh.h"
 

@@ -17,7 +17,7 @@
 #include <span>
 #include <vector>
 
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda_grid.h"
 
 namespace raylab {
 

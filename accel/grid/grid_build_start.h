@@ -9,9 +9,9 @@
 #include <fmt/format.h>
 
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/grid_resolution.h"
 
 namespace raylab {
 

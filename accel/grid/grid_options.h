@@ -17,8 +17,8 @@
 
 #include "accel/core/any_hit_order.h"
 #include "accel/core/intersect_triangle.h"
-#include "accel/grid/cell_overlap.h"
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/cell_overlap.h"
+#include "accel/core/grid/grid_resolution.h"
 #include "accel/registry.h"
 #include "base/spec.h"
 

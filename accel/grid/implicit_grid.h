@@ -15,7 +15,7 @@
 
 #include "accel/accelerator.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 
 namespace raylab {

@@ -5,7 +5,7 @@
 #include <bit>
 #include <cstdint>
 
-#include "accel/grid/grid_ray_query.h"
+#include "accel/core/grid/grid_ray_query.h"
 #include "accel/grid/implicit_grid.h"
 
 namespace raylab {

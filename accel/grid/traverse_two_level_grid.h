@@ -10,7 +10,7 @@
 // cell once its sub-grid is done.
 #include <cstdint>
 
-#include "accel/grid/grid_ray_query.h"
+#include "accel/core/grid/grid_ray_query.h"
 #include "accel/grid/two_level_grid.h"
 
 namespace raylab {

@@ -5,11 +5,11 @@
 #include <vector>
 
 #include "accel/accelerator.h"
-#include "accel/grid/cell_lists.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/cell_lists.h"
+#include "accel/core/grid/dda_grid.h"
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/bvh/huge_page_allocator.h"
+#include "accel/core/huge_page_allocator.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {

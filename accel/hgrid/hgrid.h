@@ -24,8 +24,8 @@
 #include <vector>
 
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/cell_hash_table.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/cell_hash_table.h"
+#include "accel/core/grid/dda_grid.h"
 
 namespace raylab {
 

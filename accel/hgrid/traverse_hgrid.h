@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/grid/grid_ray_query.h"
+#include "accel/core/grid/grid_ray_query.h"
 #include "accel/hgrid/hgrid.h"
 
 namespace raylab {

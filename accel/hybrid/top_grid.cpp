@@ -5,7 +5,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/grid_resolution.h"
 
 namespace raylab {
 

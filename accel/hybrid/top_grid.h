@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/cell_lists.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/cell_lists.h"
+#include "accel/core/grid/dda_grid.h"
 #include "base/triangle_mesh.h"
 
 namespace raylab {

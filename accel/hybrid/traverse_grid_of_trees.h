@@ -20,7 +20,7 @@
 #include <cstdint>
 
 #include "accel/core/hit_recorder.h"
-#include "accel/grid/dda.h"
+#include "accel/core/grid/dda.h"
 #include "accel/hybrid/cell_trees.h"
 
 namespace raylab {

@@ -8,8 +8,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "accel/grid/cell_overlap.h"
-#include "accel/grid/grid_stats.h"
+#include "accel/core/grid/cell_overlap.h"
+#include "accel/core/grid/grid_stats.h"
 
 namespace raylab {
 

@@ -29,10 +29,10 @@
 #include <new>
 #include <vector>
 
-#include "accel/bvh/huge_page_allocator.h"
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/huge_page_allocator.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda_grid.h"
 
 namespace raylab {
 

@@ -33,8 +33,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/bvh/triangle_block.h"
-#include "accel/grid/grid_ray_query.h"
+#include "accel/core/simd/triangle_block.h"
+#include "accel/core/grid/grid_ray_query.h"
 #include "accel/irgrid/irgrid.h"
 
 namespace raylab {

@@ -9,7 +9,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "accel/kdtree/kd_build_start.h"
-#include "accel/kdtree/clip_triangle.h"
+#include "accel/core/clip_triangle.h"
 #include "accel/kdtree/kd_tree_writer.h"
 
 namespace raylab {

@@ -14,8 +14,8 @@
 #include <span>
 #include <vector>
 
-#include "accel/bvh/huge_page_allocator.h"
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/huge_page_allocator.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/kdtree/kdtree_node.h"
 #include "base/triangle_mesh.h"
 

@@ -8,7 +8,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "accel/grid/tri_box_overlap.h"
+#include "accel/core/tri_box_overlap.h"
 #include "accel/core/sah_report.h"
 
 #include "accel/octree/octree_tmp_tree.h"

@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/octree/octree_node.h"
 #include "base/triangle_mesh.h"
 

@@ -14,8 +14,8 @@
 #include "accel/bvh/traverse_wide.h"
 #include "accel/core/intersect_triangle.h"
 #include "accel/core/slab_test.h"
-#include "accel/grid/dda.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda.h"
+#include "accel/core/grid/dda_grid.h"
 #include "base/pcg.h"
 
 namespace raylab {

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "accel/accelerator.h"
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/grid_resolution.h"
 
 namespace raylab {
 

@@ -1,4 +1,4 @@
-#include "accel/grid/cell_lists.h"
+#include "accel/core/grid/cell_lists.h"
 
 #include "accel/grid/exclusive_scan.h"
 

@@ -14,7 +14,7 @@
 
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
-#include "accel/kdtree/clip_triangle.h"
+#include "accel/core/clip_triangle.h"
 #include "accel/kdtree/kd_cache_layout.h"
 #include "accel/registry.h"
 #include "tests/accel_test_util.h"

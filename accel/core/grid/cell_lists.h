@@ -13,7 +13,7 @@
 #include <span>
 #include <vector>
 
-#include "accel/grid/cell_overlap.h"
+#include "accel/core/grid/cell_overlap.h"
 #include "accel/core/leaf_triangle.h"
 
 namespace raylab {

@@ -24,7 +24,7 @@
 // and walk.
 #include <cstdint>
 
-#include "accel/bvh/simd.h"
+#include "accel/core/simd/simd.h"
 #include "accel/core/intersect_triangle.h"
 
 namespace raylab {

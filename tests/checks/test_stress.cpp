@@ -14,7 +14,7 @@
 #include "checks/oracle.h"
 #include "checks/stress.h"
 #include "scenes/procedural.h"
-#include "test_util.h"
+#include "tests/test_util.h"
 
 namespace raylab {
 namespace {

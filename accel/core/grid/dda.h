@@ -24,7 +24,7 @@
 #include <limits>
 
 #include "base/ray.h"
-#include "accel/grid/dda_grid.h"
+#include "accel/core/grid/dda_grid.h"
 
 namespace raylab {
 

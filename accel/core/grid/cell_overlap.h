@@ -16,8 +16,8 @@
 #include <type_traits>
 
 #include "base/aabb.h"
-#include "accel/grid/dda_grid.h"
-#include "accel/grid/tri_box_overlap.h"
+#include "accel/core/grid/dda_grid.h"
+#include "accel/core/tri_box_overlap.h"
 
 namespace raylab {
 

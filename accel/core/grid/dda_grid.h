@@ -14,7 +14,7 @@
 #include <cstdint>
 
 #include "base/aabb.h"
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/grid_resolution.h"
 
 namespace raylab {
 

@@ -1,4 +1,4 @@
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/grid_resolution.h"
 
 #include <algorithm>
 #include <charconv>

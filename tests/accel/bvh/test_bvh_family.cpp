@@ -35,7 +35,7 @@
 #include "accel/bvh/small_sweep.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/bvh/traverse_packet.h"
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/registry.h"
 #include "tests/accel_test_util.h"
 #include "tests/test_util.h"

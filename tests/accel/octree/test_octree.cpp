@@ -11,7 +11,7 @@
 #include <limits>
 #include <map>
 
-#include "accel/grid/tri_box_overlap.h"
+#include "accel/core/tri_box_overlap.h"
 #include "accel/octree/build_octree.h"
 #include "accel/octree/traverse_octree.h"
 #include "accel/registry.h"

@@ -15,12 +15,12 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "accel/bvh/triangle_block.h"
+#include "accel/core/simd/triangle_block.h"
 #include "accel/core/hit_recorder.h"
 #include "accel/core/leaf_block_dispatch.h"
 #include "accel/core/leaf_triangle.h"
-#include "accel/grid/dda.h"
-#include "accel/grid/mailbox.h"
+#include "accel/core/grid/dda.h"
+#include "accel/core/grid/mailbox.h"
 #include "accel/kdtree/kd_leaf_blocks.h"
 
 namespace raylab {

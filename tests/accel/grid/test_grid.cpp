@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "accel/grid/cell_clearance.h"
-#include "accel/grid/cell_overlap.h"
-#include "accel/grid/dda.h"
-#include "accel/grid/grid_resolution.h"
+#include "accel/core/grid/cell_overlap.h"
+#include "accel/core/grid/dda.h"
+#include "accel/core/grid/grid_resolution.h"
 #include "accel/grid/hash_grid.h"
-#include "accel/grid/tri_box_overlap.h"
+#include "accel/core/tri_box_overlap.h"
 #include "accel/grid/two_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 #include "accel/registry.h"
