@@ -139,8 +139,11 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
                          : o.scale == "auto"                              ? ScaleKind::Auto
                                                                           : ScaleKind::Linear;
   const CostScale shared = fit_cost_scale(all, kind);
+  // The legend says which scale the colours are on.
   std::string label = aov_label(o.kind);
-  if (sheet) label += each ? ", each tile its own scale" : ", one scale for all tiles";
+  if (sheet && each) label += ", this tile's own scale";
+  else if (sheet) label += shared.log ? ", one log scale for all tiles" : ", one scale for all tiles";
+  else if (shared.log) label += " (log scale)";
   int title_rows = 0;
   for (const auto& r : results)
     title_rows = std::max(title_rows, static_cast<int>(wrap_text(r.spec, w - 12, label_size_for(w)).size()));

@@ -423,8 +423,8 @@ void leaderboard(Doc& doc, const std::vector<json>& recs, const std::string& pro
   doc.heading("leaderboard", "Leaderboard: speed relative to Embree");
   doc.para(fmt::format(
       "Per ray set, one thread: each structure's rays per second divided by single-ray Embree's (embree) on the same "
-      "rays, timed back to back in the same run (ratio_to_embree), geometric mean over the {} benchmark scene(s) "
-      "({}). Bars from zero: median of the repeats; whiskers: the slowest and fastest repeat (geometric mean of each "
+      "rays, timed in alternation with it, repeat by repeat, in the same run (ratio_to_embree), geometric mean over "
+      "the {} benchmark scene(s) ({}). Bars from zero: median of the repeats; whiskers: the slowest and fastest repeat (geometric mean of each "
       "over the scenes); the dashed line is Embree.{} Structures measured on fewer scenes are charted apart: their "
       "means are over those scenes only.",
       cover.scenes.size(), fmt::join(cover.scenes, ", "),
@@ -681,13 +681,14 @@ void pictures(Doc& doc, const Inputs& in, const fs::path& md_dir, const fs::path
     }
   };
   if (!in.heatmaps.empty()) {
-    doc.para("Per-pixel cost (raylab render --aov): where each structure spends its work, one shared colour scale "
-             "per sheet.");
+    doc.para("Per-pixel cost (raylab render --aov): where each structure spends its work; each sheet's legend says "
+             "its colour scale (by default one log scale for all its tiles, so one costly structure does not wash "
+             "out the others).");
     images(in.heatmaps, "heatmap");
   }
   if (!in.structures.empty()) {
     doc.para("The structures themselves (raylab show): boxes, split planes and occupied cells over the scene, "
-             "coloured by depth.");
+             "coloured by depth (each picture's legend gives the colours).");
     images(in.structures, "structure");
   }
   if (!in.extra_charts.empty()) {
@@ -706,6 +707,7 @@ const char* kStyle = R"(body{font-family:sans-serif;max-width:980px;margin:2em a
 h1{font-size:1.6em}h2{margin-top:2em;border-bottom:1px solid #ddd}
 table{border-collapse:collapse;margin:1em 0;font-size:0.9em}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}
 td:first-child,th:first-child{text-align:left}figure{margin:1em 0}img{max-width:100%}
+figure svg{max-width:100%;height:auto}
 footer{margin-top:3em;font-size:0.8em;color:#555;border-top:1px solid #ddd;padding-top:1em}
 .mixed{background:#fbe7b5;border:1px solid #d9a400;padding:0.6em 1em;font-weight:bold})";
 

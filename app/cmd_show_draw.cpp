@@ -273,7 +273,7 @@ Image cost_picture(const std::vector<float>& values, int width, int height, cons
   // Title lines above the picture (never over it), the colour bar, its ticks
   // and the label below.
   const std::vector<std::string> title_lines = title.empty() ? std::vector<std::string>{} : wrap_text(title, width - 2 * margin, px);
-  const std::string legend = label + (scale.log ? " (log scale)" : "");
+  const std::string& legend = label;
   const std::vector<std::string> legend_lines = wrap_text(legend, width - 2 * margin, px);
   const int rows = std::max(static_cast<int>(title_lines.size()), title_rows);
   const int above = rows == 0 ? 0 : rows * line + 6;
@@ -305,7 +305,7 @@ Image cost_picture(const std::vector<float>& values, int width, int height, cons
     const std::string s = tick_text(v);
     const int w = text_width(s, px);
     const int left = std::clamp(tx - w / 2, 0, std::max(0, width - w));
-    if (left < last_right + 4) continue;
+    if (left < last_right + px / 2) continue;  // at least half an em between labels
     draw_text(img, left, bar_y + bar_h + 4, s, ink, px);
     last_right = left + w;
   }

@@ -79,7 +79,7 @@ int label_size_for(int width);
 
 // The cost values as a colour image with `title` (wrapped to fit; empty =
 // none) in a band above and a legend band below: a colour bar, round tick
-// values and `label` (e.g. "nodes per ray", "(log scale)" added when it is).
+// values and `label` (e.g. "nodes per ray (log scale)": the caller says the scale).
 // `title_rows` reserves at least that many title lines (tiles of one sheet
 // line up). Empty `values`: a grey picture saying "no per-ray counters".
 Image cost_picture(const std::vector<float>& values, int width, int height, const CostScale& scale,

@@ -70,14 +70,12 @@ float to_linear(float s) { return s <= 0.04045f ? s / 12.92f : std::pow((s + 0.0
 int ascender(FT_Face f) { return static_cast<int>(f->size->metrics.ascender >> 6); }
 int descender(FT_Face f) { return static_cast<int>(-(f->size->metrics.descender >> 6)); }
 
-}  // namespace
-
-void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& colour, int px) {
-  Face& face = Face::get();
-  std::lock_guard<std::mutex> guard(face.lock());
-  FT_Face f = face.at(px);
-  const int baseline = y + ascender(f);
-  int pen = x;
+// Lays `text` out glyph by glyph (kerning included): loads each glyph with
+// `load_flags` and calls at(glyph slot, pen x from the start); returns the
+// advance width. draw_text and text_width share it, so widths match drawings.
+template <class At>
+int lay_out(FT_Face f, const std::string& text, FT_Int32 load_flags, At&& at) {
+  int pen = 0;
   FT_UInt previous = 0;
   for (unsigned char ch : text) {
     const FT_UInt glyph = FT_Get_Char_Index(f, ch);
@@ -87,9 +85,23 @@ void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& c
       pen += static_cast<int>(k.x >> 6);
     }
     previous = glyph;
-    if (FT_Load_Glyph(f, glyph, FT_LOAD_RENDER) != 0) continue;
-    const FT_Bitmap& bm = f->glyph->bitmap;
-    const int left = pen + f->glyph->bitmap_left, top = baseline - f->glyph->bitmap_top;
+    if (FT_Load_Glyph(f, glyph, load_flags) != 0) continue;
+    at(f->glyph, pen);
+    pen += static_cast<int>(f->glyph->advance.x >> 6);
+  }
+  return pen;
+}
+
+}  // namespace
+
+void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& colour, int px) {
+  Face& face = Face::get();
+  std::lock_guard<std::mutex> guard(face.lock());
+  FT_Face f = face.at(px);
+  const int baseline = y + ascender(f);
+  lay_out(f, text, FT_LOAD_RENDER, [&](FT_GlyphSlot g, int pen) {
+    const FT_Bitmap& bm = g->bitmap;
+    const int left = x + pen + g->bitmap_left, top = baseline - g->bitmap_top;
     for (unsigned row = 0; row < bm.rows; ++row)
       for (unsigned col = 0; col < bm.width; ++col) {
         const int px_x = left + static_cast<int>(col), px_y = top + static_cast<int>(row);
@@ -101,27 +113,13 @@ void draw_text(Image& img, int x, int y, const std::string& text, const Vec3f& c
         for (int c = 0; c < 3; ++c) out[c] = to_linear((1.0f - a) * to_srgb(under[c]) + a * to_srgb(colour[c]));
         img.set(px_x, px_y, out);
       }
-    pen += static_cast<int>(f->glyph->advance.x >> 6);
-  }
+  });
 }
 
 int text_width(const std::string& text, int px) {
   Face& face = Face::get();
   std::lock_guard<std::mutex> guard(face.lock());
-  FT_Face f = face.at(px);
-  int w = 0;
-  FT_UInt previous = 0;
-  for (unsigned char ch : text) {
-    const FT_UInt glyph = FT_Get_Char_Index(f, ch);
-    if (previous && glyph && FT_HAS_KERNING(f)) {
-      FT_Vector k;
-      FT_Get_Kerning(f, previous, glyph, FT_KERNING_DEFAULT, &k);
-      w += static_cast<int>(k.x >> 6);
-    }
-    previous = glyph;
-    if (FT_Load_Glyph(f, glyph, FT_LOAD_DEFAULT) == 0) w += static_cast<int>(f->glyph->advance.x >> 6);
-  }
-  return w;
+  return lay_out(face.at(px), text, FT_LOAD_DEFAULT, [](FT_GlyphSlot, int) {});
 }
 
 int text_height(int px) {

@@ -433,7 +433,7 @@ std::vector<EmbreeNoise> embree_noise(const std::vector<BenchRecord>& records) {
 std::string format_embree_noise(const std::vector<EmbreeNoise>& noise) {
   if (noise.empty()) return {};
   std::string s =
-      "noise floor: single-ray Embree timed back to back with each structure (median Mrays/s, min - max, "
+      "noise floor: single-ray Embree timed in alternation with each structure (median Mrays/s, min - max, "
       "spread = (max - min) / median); ratios closer than the spread are not resolved\n";
   for (const auto& n : noise)
     s += fmt::format("  embree {:<8} t{:<3} {:>3} timings: {:>8.2f} ({:.2f} - {:.2f}), spread {:.1f} %\n", n.ray_set,

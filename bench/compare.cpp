@@ -119,7 +119,7 @@ double median(std::vector<double> v) {
 }
 
 // The run's noise floor: per (scene, ray set, threads), the spread (max - min)
-// / median of the Embree speeds timed back to back with each structure; the
+// / median of the Embree speeds timed in alternation with each structure; the
 // median of those spreads (NaN when no group has two timings).
 double embree_noise_pct(const std::map<CellKey, nlohmann::json>& cells) {
   std::map<std::tuple<std::string, std::string, int>, std::vector<double>> groups;
@@ -226,34 +226,33 @@ CompareResult compare_bench_reports(const nlohmann::json& a, const nlohmann::jso
 nlohmann::json compare_result_json(const CompareResult& r, const CompareOptions& opt) {
   auto opt_number = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
   auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  // A figure of both runs: NAME_a and NAME_b.
+  auto both = [](nlohmann::json& j, const std::string& name, nlohmann::json a, nlohmann::json b) {
+    j[name + "_a"] = std::move(a);
+    j[name + "_b"] = std::move(b);
+  };
   nlohmann::json cells = nlohmann::json::array();
-  for (const auto& c : r.cells)
-    cells.push_back({{"scene", c.scene},
-                     {"accel", c.accel},
-                     {"ray_set", c.ray_set},
-                     {"threads", c.threads},
-                     {"mrays_per_s_a", c.mrays_a},
-                     {"mrays_per_s_b", c.mrays_b},
-                     {"mrays_change_pct", c.mrays_change_pct},
-                     {"ratio_to_embree_a", opt_number(c.ratio_a)},
-                     {"ratio_to_embree_b", opt_number(c.ratio_b)},
-                     {"ratio_to_embree_change_pct", opt_number(c.ratio_change_pct)},
-                     {"tested", c.normalized ? "ratio_to_embree"
-                                : c.reference && opt.normalize_by_embree ? "none (the reference)"
-                                                                         : "mrays_per_s"},
-                     {"change_pct", c.change_pct},
-                     {"build_ms_a", c.build_ms_a},
-                     {"build_ms_b", c.build_ms_b},
-                     {"build_change_pct", c.build_change_pct},
-                     {"bytes_a", c.bytes_a},
-                     {"bytes_b", c.bytes_b},
-                     {"bytes_change_pct", c.bytes_change_pct},
-                     {"repeats_a", c.repeats_a},
-                     {"repeats_b", c.repeats_b},
-                     {"p_value", opt_number(c.p_value)},
-                     {"testable", c.testable},
-                     {"significant", c.significant},
-                     {"regression", c.regression}});
+  for (const auto& c : r.cells) {
+    nlohmann::json j = {{"scene", c.scene}, {"accel", c.accel}, {"ray_set", c.ray_set}, {"threads", c.threads}};
+    both(j, "mrays_per_s", c.mrays_a, c.mrays_b);
+    j["mrays_change_pct"] = c.mrays_change_pct;
+    both(j, "ratio_to_embree", opt_number(c.ratio_a), opt_number(c.ratio_b));
+    j["ratio_to_embree_change_pct"] = opt_number(c.ratio_change_pct);
+    j["tested"] = c.normalized                               ? "ratio_to_embree"
+                  : c.reference && opt.normalize_by_embree ? "none (the reference)"
+                                                           : "mrays_per_s";
+    j["change_pct"] = c.change_pct;
+    both(j, "build_ms", c.build_ms_a, c.build_ms_b);
+    j["build_change_pct"] = c.build_change_pct;
+    both(j, "bytes", c.bytes_a, c.bytes_b);
+    j["bytes_change_pct"] = c.bytes_change_pct;
+    both(j, "repeats", c.repeats_a, c.repeats_b);
+    j.update({{"p_value", opt_number(c.p_value)},
+              {"testable", c.testable},
+              {"significant", c.significant},
+              {"regression", c.regression}});
+    cells.push_back(std::move(j));
+  }
   return {{"schema_version", kReportSchemaVersion},
           {"command", "compare"},
           {"alpha", opt.alpha},

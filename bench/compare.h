@@ -8,7 +8,7 @@
 // Drift: runs of one revision on a shared machine differ by a few percent
 // because the machine's load changes between them, and with seven repeats per
 // run the U test calls such a shift significant. Bench times single-ray Embree
-// back to back with every cell (embree_mrays_per_s), so by default each
+// in alternation with every cell (embree_mrays_per_s, embree_trace_s), so each
 // repeat's time is divided by that same-cell Embree time: the test and the
 // verdict are on the ratio to Embree, which a machine-wide slow-down moves
 // far less than raw times. The reference cells themselves, and reports
@@ -86,7 +86,7 @@ struct CompareResult {
   size_t untestable = 0;  // cells whose repeats cannot reach p < alpha
   // The noise floor of each run: the median over (scene, ray set, threads)
   // of the spread of single-ray Embree's timings within the run (bench times
-  // it back to back with every structure); NaN when a run has none.
+  // it in alternation with every structure); NaN when a run has none.
   double noise_a_pct = 0, noise_b_pct = 0;
   // The smallest change reported: min_effect_pct, or the larger noise floor.
   double threshold_pct = 0;

@@ -72,7 +72,20 @@ def family(scene):
     return scene.split(":")[0]
 
 
+def label_log_axes(fig):
+    """Every log axis says so in its label: a reader who misses it reads distances as differences.
+    (Log axes are for dot and line plots only; bar charts are not drawn on them.)"""
+    for ax in fig.get_axes():
+        for axis, scale, label, setter in (("x", ax.get_xscale(), ax.get_xlabel(), ax.set_xlabel),
+                                           ("y", ax.get_yscale(), ax.get_ylabel(), ax.set_ylabel)):
+            if scale in ("log", "symlog") and label and "log" not in label:
+                lines = label.split("\n")
+                lines[0] += " (symmetric log scale)" if scale == "symlog" else " (log scale)"
+                setter("\n".join(lines))
+
+
 def save(fig, out_dir, name, written):
+    label_log_axes(fig)
     os.makedirs(out_dir, exist_ok=True)
     for ext in ("png", "svg"):
         path = os.path.join(out_dir, f"{name}.{ext}")
@@ -84,8 +97,13 @@ def save(fig, out_dir, name, written):
 def footer(fig, header):
     if not header:
         return
-    text = f"{header.get('cpu', '?')} | Embree {header.get('embree', '?')} | rev {header.get('revision', '?')} | {header.get('date', '?')}"
-    fig.text(0.01, -0.02, text, fontsize=7, color="gray", ha="left", va="top")
+    # Only what the report records: no "?" placeholders for missing fields.
+    parts = [header.get("cpu"), f"Embree {header['embree']}" if header.get("embree") else None,
+             f"rev {header['revision']}" if header.get("revision") not in (None, "", "unknown") else None,
+             header.get("date")]
+    text = " | ".join(p for p in parts if p)
+    if text:
+        fig.text(0.01, -0.02, text, fontsize=7, color="gray", ha="left", va="top")
 
 
 def single_thread(recs):
@@ -264,9 +282,13 @@ def chart_speed_vs_memory(bench, out, written, header):
     if not by:
         return False
     specs = sorted(by)
+    all_scenes = {r["scene"] for r in recs}
     fig, ax = plt.subplots(figsize=(8.5, 5))
     for k in specs:
         rs = by[k]
+        scenes = {r["scene"] for r in rs}
+        # A mean over fewer scenes is not comparable with the others: hollow marker, and the label says so.
+        fewer = len(scenes) < len(all_scenes)
         x = geomean([r.get("bytes_per_triangle") for r in rs])
         y = geomean([r["ratio_to_embree"] for r in rs])
         lo = geomean([ratio_range(r)[0] for r in rs])
@@ -274,7 +296,8 @@ def chart_speed_vs_memory(bench, out, written, header):
         st = style_of(k, specs)
         yerr = [[max(y - lo, 0)], [max(hi - y, 0)]] if lo == lo and hi == hi else None
         ax.errorbar([x], [y], yerr=yerr, fmt=st["marker"], color=st["color"], ms=7, mec="black", mew=0.4,
-                    capsize=3, label=k)
+                    mfc="none" if fewer else st["color"], capsize=3,
+                    label=f"{k} ({len(scenes)} of {len(all_scenes)} scenes)" if fewer else k)
     ax.set_xscale("log")
     ax.set_yscale("log")
     log_ticks(ax)

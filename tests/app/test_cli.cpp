@@ -56,6 +56,7 @@ TEST(Cli, BadArgumentsExitWithCode2AndAMessage) {
 TEST(Cli, RenderWritesAPngOfTheRequestedSize) {
   const auto dir = test::temp_dir("cli_render");
   const auto png = dir / "sub" / "c.png";
+  fs::create_directories(dir / "sub");  // an output's directory must exist (tests/app/test_output_paths.cpp)
   const auto r = test::run_raylab("render --scene cornell --spp 2 --size 40x30 --quiet --out " + png.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(png, std::ios::binary);

@@ -175,14 +175,14 @@ TEST(CliVocabulary, HelpAndMessagesSayWhatIsAccepted) {
   EXPECT_THAT(render.output, Not(HasSubstr("half")));
   // show's default depth is the one the README's pictures use.
   EXPECT_THAT(test::run_raylab("show --help").output, ::testing::ContainsRegex("--depth INT[^\n]*=4\n"));
-  // Limits are named.
-  const auto size = test::run_raylab("render --size 100000x100000");
-  EXPECT_EQ(size.exit_code, 2);
-  EXPECT_THAT(size.output, HasSubstr("at most 65536"));
-  // rays takes one set and says why.
-  const auto rays = test::run_raylab("rays cornell --ray-sets primary,random -o x.rays");
-  EXPECT_EQ(rays.exit_code, 2);
-  EXPECT_THAT(rays.output, HasSubstr("a ray file holds one ray set"));
+  // Limits are named; rays takes one set and says why.
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"render --size 100000x100000", "at most 65536"},
+           {"rays cornell --ray-sets primary,random -o x.rays", "a ray file holds one ray set"}}) {
+    const auto r = test::run_raylab(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_THAT(r.output, HasSubstr(message)) << args;
+  }
 }
 
 TEST(CliVocabulary, ErrorsPointToTheSubcommandsOwnHelp) {
@@ -337,73 +337,80 @@ TEST(CliInterrupt, CtrlCInStressKeepsFinishedRecordsAndExits130) {
   EXPECT_LT(j["records"].size(), 2 * static_cast<size_t>(std::count(full.output.begin(), full.output.end(), '\n')));
 }
 
+// A long command interrupted in the middle of its work: started with
+// `args` (its output file last), signalled `delay_ms` after `marker` appears
+// in its output (at once when empty); the exit code, the seconds it took to
+// end after the signal, and its JSON report (null when none was written).
+struct Interrupted {
+  int exit_code = -1;
+  double seconds = 0;
+  std::string output;
+  nlohmann::json report;
+};
+Interrupted interrupt_mid_run(const std::vector<std::string>& args, const std::string& marker, int delay_ms) {
+  Interrupted r;
+  auto [pid, fd] = spawn_raylab(args);
+  if (pid <= 0) return r;
+  if (!marker.empty()) r.output = read_until(fd, marker);
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  r.exit_code = interrupt_and_wait(pid, fd, &r.seconds);
+  if (fs::exists(args.back()) && args.back().size() > 5 && args.back().substr(args.back().size() - 5) == ".json")
+    r.report = read_json(args.back());
+  return r;
+}
+
 TEST(CliInterrupt, CtrlCStopsVerifyInsideABruteForceRecord) {
   // verify's brute force over 20000 triangles x 200000 rays takes minutes; Ctrl-C
-  // in the middle of it stops within seconds, keeping the finished bvh records.
-  const auto dir = test::temp_dir("int_verify_cell");
-  const auto json = dir / "v.json";
-  auto [pid, fd] = spawn_raylab({"verify", "soup:n=20000", "--accel", "bvh;brute", "--rays", "200000", "-t", "1", "-q",
-                                 "-o", json.string()});
-  ASSERT_GT(pid, 0);
-  // bvh's two records, printed as they finish; brute is running after them.
-  const std::string got = read_until(fd, "random");
-  ASSERT_THAT(got, ::testing::ContainsRegex("bvh +random")) << got;
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  double seconds = 0;
-  EXPECT_EQ(interrupt_and_wait(pid, fd, &seconds), 130);
-  EXPECT_LT(seconds, kStopWithinSeconds);
-  const auto j = read_json(json);
-  EXPECT_EQ(j["complete"], false);
-  ASSERT_EQ(j["records"].size(), 2u) << j.dump();
-  for (const auto& rec : j["records"]) EXPECT_EQ(rec["accel"], "bvh");
+  // in the middle of it stops within seconds, keeping the finished bvh records
+  // (printed as they finish; brute is running after them).
+  const auto json = test::temp_dir("int_verify_cell") / "v.json";
+  const auto r = interrupt_mid_run({"verify", "soup:n=20000", "--accel", "bvh;brute", "--rays", "200000", "-t", "1",
+                                    "-q", "-o", json.string()},
+                                   "random", 500);
+  ASSERT_THAT(r.output, ::testing::ContainsRegex("bvh +random")) << r.output;
+  EXPECT_EQ(r.exit_code, 130);
+  EXPECT_LT(r.seconds, kStopWithinSeconds);
+  EXPECT_EQ(r.report["complete"], false);
+  ASSERT_EQ(r.report["records"].size(), 2u) << r.report.dump();
+  for (const auto& rec : r.report["records"]) EXPECT_EQ(rec["accel"], "bvh");
 }
 
 TEST(CliInterrupt, CtrlCStopsBenchInsideACell) {
-  // One brute-force cell timed 50 times: far longer than the bound.
-  const auto dir = test::temp_dir("int_bench_cell");
-  const auto json = dir / "b.json";
-  auto [pid, fd] = spawn_raylab({"bench", "soup:n=4000", "--accel", "embree;brute", "--ray-sets", "random", "--rays",
-                                 "100000", "--repeats", "50", "--min-time", "0", "-t", "1", "-o", json.string()});
-  ASSERT_GT(pid, 0);
-  const std::string got = read_until(fd, "embree random t=1");  // Embree's cell is done (stderr, not a terminal)
-  ASSERT_THAT(got, HasSubstr("embree random t=1")) << got;
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-  double seconds = 0;
-  EXPECT_EQ(interrupt_and_wait(pid, fd, &seconds), 130);
-  EXPECT_LT(seconds, kStopWithinSeconds);
-  const auto j = read_json(json);
-  EXPECT_EQ(j["complete"], false);
-  ASSERT_EQ(j["records"].size(), 1u) << j.dump();
-  EXPECT_EQ(j["records"][0]["accel"], "embree");
+  // One brute-force cell timed 30 times: far longer than the bound. Embree's
+  // cell is done when its line appears (stderr, not a terminal).
+  const auto json = test::temp_dir("int_bench_cell") / "b.json";
+  const auto r = interrupt_mid_run({"bench", "soup:n=4000", "--accel", "embree;brute", "--ray-sets", "random", "--rays",
+                                    "50000", "--repeats", "30", "--min-time", "0", "-t", "1", "-o", json.string()},
+                                   "embree random t=1", 1000);
+  ASSERT_THAT(r.output, HasSubstr("embree random t=1")) << r.output;
+  EXPECT_EQ(r.exit_code, 130);
+  EXPECT_LT(r.seconds, kStopWithinSeconds);
+  EXPECT_EQ(r.report["complete"], false);
+  ASSERT_EQ(r.report["records"].size(), 1u) << r.report.dump();
+  EXPECT_EQ(r.report["records"][0]["accel"], "embree");
 }
 
 TEST(CliInterrupt, CtrlCStopsStressInsideARecord) {
   // Brute force on the stadium with a 120 s budget: interrupted within seconds.
-  const auto dir = test::temp_dir("int_stress_cell");
-  const auto json = dir / "s.json";
-  auto [pid, fd] = spawn_raylab({"stress", "stadium", "--accel", "brute", "--budget", "120", "-t", "1", "-q", "-o",
-                                 json.string()});
-  ASSERT_GT(pid, 0);
-  ASSERT_THAT(read_until(fd, "leaks/M\n"), HasSubstr("leaks/M"));
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  double seconds = 0;
-  EXPECT_EQ(interrupt_and_wait(pid, fd, &seconds), 130);
-  EXPECT_LT(seconds, kStopWithinSeconds);
-  const auto j = read_json(json);
-  EXPECT_EQ(j["complete"], false);
-  EXPECT_EQ(j["records"].size(), 0u) << "the interrupted record is dropped, not kept half-done";
+  const auto json = test::temp_dir("int_stress_cell") / "s.json";
+  const auto r = interrupt_mid_run(
+      {"stress", "stadium", "--accel", "brute", "--budget", "120", "-t", "1", "-q", "-o", json.string()}, "leaks/M\n",
+      1500);
+  ASSERT_THAT(r.output, HasSubstr("leaks/M"));
+  EXPECT_EQ(r.exit_code, 130);
+  EXPECT_LT(r.seconds, kStopWithinSeconds);
+  EXPECT_EQ(r.report["complete"], false);
+  EXPECT_EQ(r.report["records"].size(), 0u) << "the interrupted record is dropped, not kept half-done";
 }
 
 TEST(CliInterrupt, CtrlCStopsARenderAndWritesNoImage) {
   const auto dir = test::temp_dir("int_render");
   const auto png = dir / "r.png";
-  auto [pid, fd] = spawn_raylab({"render", "cornell", "-s", "100000", "--size", "64x64", "-t", "1", "-q", "-o",
-                                 png.string(), "--timings", (dir / "r.json").string()});
-  ASSERT_GT(pid, 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  double seconds = 0;
-  EXPECT_EQ(interrupt_and_wait(pid, fd, &seconds), 130);
-  EXPECT_LT(seconds, kStopWithinSeconds);
+  const auto r = interrupt_mid_run({"render", "cornell", "-s", "100000", "--size", "64x64", "-t", "1", "-q", "--timings",
+                                    (dir / "r.json").string(), "-o", png.string()},
+                                   "", 1500);
+  EXPECT_EQ(r.exit_code, 130);
+  EXPECT_LT(r.seconds, kStopWithinSeconds);
   EXPECT_FALSE(fs::exists(png)) << "a partial image would pass for a finished one";
   EXPECT_FALSE(fs::exists(dir / "r.json"));
 }

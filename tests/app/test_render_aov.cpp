@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 
 #include "tests/test_util.h"
 #include "tracer/image.h"
@@ -82,25 +83,29 @@ TEST(RenderAov, ASheetSharesALogScaleUnlessEachTileGetsItsOwn) {
   // saturate a shared linear scale for the others: a sheet defaults to one
   // log scale, and --aov-scale each gives every tile its own.
   const auto dir = test::temp_dir("aov_scale");
-  const auto shared = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 -o " +
-                                       (dir / "s.png").string());
-  ASSERT_EQ(shared.exit_code, 0) << shared.output;
-  EXPECT_THAT(shared.output, HasSubstr("(colours: one log scale, 0 to 300)"));
-  const auto each = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 --aov-scale each -o " +
-                                     (dir / "e.png").string());
-  ASSERT_EQ(each.exit_code, 0) << each.output;
-  EXPECT_THAT(each.output, HasSubstr("(colours: each tile its own linear scale)"));
-  const auto linear = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 --aov-scale linear -o " +
-                                       (dir / "l.png").string());
-  EXPECT_THAT(linear.output, HasSubstr("(colours: one linear scale, 0 to 300)"));
-  std::ifstream a(dir / "s.png", std::ios::binary), b(dir / "e.png", std::ios::binary);
-  EXPECT_NE(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
-  const auto bad = test::run_raylab("render soup:n=30 --accel bvh --aov tris --aov-scale wide -o " + (dir / "x.png").string());
-  EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_THAT(bad.output, HasSubstr("use auto, log, linear or each"));
-  const auto no_aov = test::run_raylab("render soup:n=30 --aov-scale log -o " + (dir / "y.png").string());
-  EXPECT_EQ(no_aov.exit_code, 2);
-  EXPECT_THAT(no_aov.output, HasSubstr("--aov pictures only"));
+  std::map<std::string, std::string> png;  // scale option -> the sheet's bytes
+  for (const auto& [option, says] : std::vector<std::pair<std::string, std::string>>{
+           {"", "(colours: one log scale, 0 to 300)"},
+           {"--aov-scale each", "(colours: each tile its own linear scale)"},
+           {"--aov-scale linear", "(colours: one linear scale, 0 to 300)"}}) {
+    const fs::path out = dir / ("sheet" + std::to_string(png.size()) + ".png");
+    const auto r = test::run_raylab("render soup:n=300 --accel brute,bvh --aov tris --size 24x16 " + option + " -o " +
+                                    out.string());
+    ASSERT_EQ(r.exit_code, 0) << option << "\n" << r.output;
+    EXPECT_THAT(r.output, HasSubstr(says)) << option;
+    std::ifstream in(out, std::ios::binary);
+    png[option] = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  EXPECT_NE(png[""], png["--aov-scale each"]);
+  EXPECT_NE(png[""], png["--aov-scale linear"]);
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"render soup:n=30 --accel bvh --aov tris --aov-scale wide -o " + (dir / "x.png").string(),
+            "use auto, log, linear or each"},
+           {"render soup:n=30 --aov-scale log -o " + (dir / "y.png").string(), "--aov pictures only"}}) {
+    const auto r = test::run_raylab(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_THAT(r.output, HasSubstr(message)) << args;
+  }
 }
 
 TEST(RenderAov, BadInput) {

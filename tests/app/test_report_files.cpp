@@ -35,6 +35,13 @@ void bench(const fs::path& file, const std::string& scene, const std::string& ac
   ASSERT_EQ(r.exit_code, 0) << r.output;
 }
 
+// `raylab report DIR ARGS -o DIR/page.html`: the page (empty when the command failed, with the failure recorded).
+std::string report_page(const fs::path& dir, const std::string& args = "") {
+  const auto r = test::run_raylab("report " + q(dir) + args + " -o " + q(dir / "page.html"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return r.exit_code == 0 ? slurp(dir / "page.html") : std::string();
+}
+
 TEST(ReportFiles, EveryBenchFileIsReadAndListed) {
   const auto dir = test::temp_dir("report_files");
   const fs::path run = dir / "run";
@@ -66,9 +73,7 @@ TEST(ReportFiles, StructuresMeasuredOnFewerScenesAreChartedApart) {
   const auto dir = test::temp_dir("report_fewer");
   bench(dir / "a.json", "soup:n=100", "embree,bvh,brute");
   bench(dir / "b.json", "soup:n=300", "embree,bvh");
-  const auto r = test::run_raylab("report " + q(dir) + " -o " + q(dir / "page.html"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string html = slurp(dir / "page.html");
+  const std::string html = report_page(dir);
   auto chart = [&](const std::string& id) {
     const size_t p = html.find("id=\"" + id + "\"");
     return p == std::string::npos ? std::string() : html.substr(p, html.find("</svg>", p) - p);
@@ -106,9 +111,7 @@ TEST(ReportFiles, OtherBinariesOrMachinesOnlyWithMixAndThePageSaysSo) {
   EXPECT_THAT(refused.output, HasSubstr("0123abc-other"));
   EXPECT_THAT(refused.output, HasSubstr("--mix"));
   EXPECT_FALSE(fs::exists(dir / "page.html"));
-  const auto mixed = test::run_raylab("report " + q(dir) + " --mix -o " + q(dir / "page.html"));
-  ASSERT_EQ(mixed.exit_code, 0) << mixed.output;
-  const std::string html = slurp(dir / "page.html");
+  const std::string html = report_page(dir, " --mix");
   EXPECT_THAT(html, HasSubstr("id=\"mixed\""));
   EXPECT_THAT(html, HasSubstr("Mixed on request (--mix): 2 binaries"));
   EXPECT_THAT(html, HasSubstr("revision 0123abc-other"));
@@ -138,9 +141,7 @@ TEST(ReportFiles, MergedCellFilesAreReadOnceThroughTheMergedReport) {
                              q(dir / "equal_time" / "r.json"))
                 .exit_code,
             0);
-  const auto r = test::run_raylab("report " + q(dir) + " -o " + q(dir / "page.html"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string html = slurp(dir / "page.html");
+  const std::string html = report_page(dir);
   EXPECT_THAT(html, HasSubstr("2 files under cells/"));
   EXPECT_THAT(html, HasSubstr("merged into bench.json"));
   EXPECT_THAT(html, HasSubstr("not used (a 'render' report)"));

@@ -151,15 +151,19 @@ nlohmann::json cell(const std::string& accel, double mrays, double embree_mrays,
 nlohmann::json report_of(std::vector<nlohmann::json> records) {
   return {{"schema_version", 3}, {"command", "bench"}, {"records", records}};
 }
+// Reports A and B of these cells written to a fresh temp dir compare_NAME: "A B" for compare.
+std::string report_pair(const std::string& name, std::vector<nlohmann::json> a, std::vector<nlohmann::json> b) {
+  const auto dir = test::temp_dir("compare_" + name);
+  return write(dir, "a.json", report_of(std::move(a))) + " " + write(dir, "b.json", report_of(std::move(b)));
+}
 
 TEST(Compare, MraysAndRatioChangesAreTwoColumnsWhoseSignsAgreeWithTheirHeaders) {
   // Embree ran 35 % slower in B and grid 19 % slower: grid's Mrays/s fell while
   // its ratio to Embree rose. The old single "speed" column showed +24.6 %
   // "faster" for a structure whose speed fell.
-  const auto dir = test::temp_dir("compare_columns");
-  const auto a = write(dir, "a.json", report_of({cell("embree", 20.0, 20.0, 5, 0.0, 1), cell("grid", 10.0, 20.0, 5, 0.0, 2)}));
-  const auto b = write(dir, "b.json", report_of({cell("embree", 13.0, 13.0, 5, 0.0, 3), cell("grid", 8.1, 13.0, 5, 0.0, 4)}));
-  const auto r = test::run_raylab("compare " + a + " " + b + " --no-noise-floor -o -");
+  const auto ab = report_pair("drift", {cell("embree", 20.0, 20.0, 5, 0.0, 1), cell("grid", 10.0, 20.0, 5, 0.0, 2)},
+                              {cell("embree", 13.0, 13.0, 5, 0.0, 3), cell("grid", 8.1, 13.0, 5, 0.0, 4)});
+  const auto r = test::run_raylab("compare " + ab + " --no-noise-floor -o -");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   for (const auto& c : j["cells"]) {
@@ -174,7 +178,7 @@ TEST(Compare, MraysAndRatioChangesAreTwoColumnsWhoseSignsAgreeWithTheirHeaders) 
       EXPECT_EQ(c["tested"], "none (the reference)");  // its change is the machine's drift
     }
   }
-  const auto t = test::run_raylab("compare " + a + " " + b + " --no-noise-floor --colour never");
+  const auto t = test::run_raylab("compare " + ab + " --no-noise-floor --colour never");
   ASSERT_EQ(t.exit_code, 0) << t.output;
   EXPECT_THAT(t.output, HasSubstr("Mrays/s chg"));
   EXPECT_THAT(t.output, HasSubstr("x embree chg"));
@@ -184,10 +188,9 @@ TEST(Compare, MraysAndRatioChangesAreTwoColumnsWhoseSignsAgreeWithTheirHeaders) 
 }
 
 TEST(Compare, RepeatsThatCannotReachSignificanceAreNamed) {
-  const auto dir = test::temp_dir("compare_few");
-  const auto a = write(dir, "a.json", report_of({cell("embree", 20, 20, 3, 0.01, 1), cell("bvh", 10, 20, 3, 0.01, 2)}));
-  const auto b = write(dir, "b.json", report_of({cell("embree", 20, 20, 3, 0.01, 3), cell("bvh", 5, 20, 3, 0.01, 4)}));
-  const auto r = test::run_raylab("compare " + a + " " + b + " --fail-above 5 --colour never");
+  const auto ab = report_pair("few", {cell("embree", 20, 20, 3, 0.01, 1), cell("bvh", 10, 20, 3, 0.01, 2)},
+                              {cell("embree", 20, 20, 3, 0.01, 3), cell("bvh", 5, 20, 3, 0.01, 4)});
+  const auto r = test::run_raylab("compare " + ab + " --fail-above 5 --colour never");
   // Half the speed, but three repeats a side can never give p < 0.05: not reported, and said so.
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("warning: 2 cells cannot reach significance: with 3 and 3 repeats the smallest p"));
@@ -197,32 +200,27 @@ TEST(Compare, RepeatsThatCannotReachSignificanceAreNamed) {
 
 TEST(Compare, TheMinimumEffectIsStatedAndRaisedToTheRunsNoiseFloor) {
   // A complete separation (p = 0.0079) of a 2 % shift is not reported: under --min-effect 3.
-  const auto dir = test::temp_dir("compare_effect");
-  const auto a = write(dir, "a.json", report_of({cell("embree", 20, 20, 5, 0.001, 1), cell("bvh", 10.0, 20, 5, 0.001, 2)}));
-  const auto b = write(dir, "b.json", report_of({cell("embree", 20, 20, 5, 0.001, 3), cell("bvh", 9.8, 20, 5, 0.001, 4)}));
-  auto r = test::run_raylab("compare " + a + " " + b + " -o -");
-  auto j = nlohmann::json::parse(r.output);
+  const auto ab = report_pair("small", {cell("embree", 20, 20, 5, 0.001, 1), cell("bvh", 10.0, 20, 5, 0.001, 2)},
+                              {cell("embree", 20, 20, 5, 0.001, 3), cell("bvh", 9.8, 20, 5, 0.001, 4)});
+  auto j = nlohmann::json::parse(test::run_raylab("compare " + ab + " -o -").output);
   EXPECT_EQ(j["min_effect_pct"], 3.0);
   for (const auto& c : j["cells"])
     if (c["accel"] == "bvh") {
       EXPECT_LT(c["p_value"].get<double>(), 0.01);
       EXPECT_FALSE(c["significant"].get<bool>()) << c.dump();
     }
-  EXPECT_THAT(test::run_raylab("compare " + a + " " + b + " --min-effect 1 -o -").output, HasSubstr("\"significant\": 1"));
+  EXPECT_THAT(test::run_raylab("compare " + ab + " --min-effect 1 -o -").output, HasSubstr("\"significant\": 1"));
   // A run whose Embree wandered by 20 % between cells: a 10 % change is within its noise.
-  const auto noisy_a = write(dir, "na.json", report_of({cell("embree", 20, 20, 5, 0.001, 1), cell("bvh", 10, 24, 5, 0.001, 2),
-                                                        cell("grid", 5, 20, 5, 0.001, 5)}));
-  const auto noisy_b = write(dir, "nb.json", report_of({cell("embree", 20, 20, 5, 0.001, 3), cell("bvh", 9, 24, 5, 0.001, 4),
-                                                        cell("grid", 5, 20, 5, 0.001, 6)}));
-  r = test::run_raylab("compare " + noisy_a + " " + noisy_b + " -o -");
-  j = nlohmann::json::parse(r.output);
+  const auto noisy = report_pair(
+      "noisy", {cell("embree", 20, 20, 5, 0.001, 1), cell("bvh", 10, 24, 5, 0.001, 2), cell("grid", 5, 20, 5, 0.001, 5)},
+      {cell("embree", 20, 20, 5, 0.001, 3), cell("bvh", 9, 24, 5, 0.001, 4), cell("grid", 5, 20, 5, 0.001, 6)});
+  j = nlohmann::json::parse(test::run_raylab("compare " + noisy + " -o -").output);
   EXPECT_NEAR(j["noise_a_pct"].get<double>(), 20.0, 0.5);
   EXPECT_NEAR(j["threshold_pct"].get<double>(), 20.0, 0.5);
   EXPECT_EQ(j["significant"], 0);
-  const auto t = test::run_raylab("compare " + noisy_a + " " + noisy_b + " --colour never");
-  EXPECT_THAT(t.output, HasSubstr("at least 20.0% (the noise floor, above --min-effect 3%)"));
-  EXPECT_THAT(test::run_raylab("compare " + noisy_a + " " + noisy_b + " --no-noise-floor -o -").output,
-              HasSubstr("\"significant\": 1"));
+  EXPECT_THAT(test::run_raylab("compare " + noisy + " --colour never").output,
+              HasSubstr("at least 20.0% (the noise floor, above --min-effect 3%)"));
+  EXPECT_THAT(test::run_raylab("compare " + noisy + " --no-noise-floor -o -").output, HasSubstr("\"significant\": 1"));
 }
 
 TEST(Compare, CellsMatchOnSceneAccelRaySetAndThreads) {
