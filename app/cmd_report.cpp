@@ -400,7 +400,7 @@ void charts_by_coverage(Doc& doc, const BarChart& chart, const Coverage& cover) 
   if (fewer.rows.empty()) return;
   fewer.id += "-fewer-scenes";
   fewer.title += ": measured on fewer scenes";
-  fewer.x_label += "; mean over each one's scenes only, not comparable with the chart above";
+  fewer.subtitle = "each mean is over that structure's own scenes (right), so it does not compare with the chart above";
   doc.chart(fewer);
 }
 
@@ -707,7 +707,7 @@ const char* kStyle = R"(body{font-family:sans-serif;max-width:980px;margin:2em a
 h1{font-size:1.6em}h2{margin-top:2em;border-bottom:1px solid #ddd}
 table{border-collapse:collapse;margin:1em 0;font-size:0.9em}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}
 td:first-child,th:first-child{text-align:left}figure{margin:1em 0}img{max-width:100%}
-figure svg{max-width:100%;height:auto}
+figure svg{max-width:100%;height:auto}figure.structure{display:inline-block;width:46%;margin:0.5em 1%;vertical-align:top}
 footer{margin-top:3em;font-size:0.8em;color:#555;border-top:1px solid #ddd;padding-top:1em}
 .mixed{background:#fbe7b5;border:1px solid #d9a400;padding:0.6em 1em;font-weight:bold})";
 

@@ -48,7 +48,8 @@ std::vector<double> ticks_for(double hi) {
 }  // namespace
 
 std::string svg_bar_chart(const BarChart& c) {
-  const int label_w = 190, note_w = 170, plot_w = 420, row_h = 20, top = 34, bottom = 44;
+  const int label_w = 190, note_w = 170, plot_w = 420, row_h = 20, bottom = 44;
+  const int top = c.subtitle.empty() ? 34 : 52;
   const int width = label_w + plot_w + note_w;
   const int height = top + static_cast<int>(c.rows.size()) * row_h + bottom;
   // The axis runs from 0 to past the largest value, whisker and the reference.
@@ -69,6 +70,8 @@ std::string svg_bar_chart(const BarChart& c) {
       html_escape(c.id), width, height, width, height, html_escape(c.title));
   s += fmt::format("<rect width=\"{}\" height=\"{}\" fill=\"white\"/>\n", width, height);
   s += fmt::format("<text x=\"4\" y=\"16\" font-size=\"13\" font-weight=\"bold\">{}</text>\n", html_escape(c.title));
+  if (!c.subtitle.empty())
+    s += fmt::format("<text x=\"4\" y=\"31\" fill=\"#555\">{}</text>\n", html_escape(c.subtitle));
   const int plot_bottom = top + static_cast<int>(c.rows.size()) * row_h;
   for (double t : ticks_for(hi)) {
     const double x = x_of(t);

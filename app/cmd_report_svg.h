@@ -21,6 +21,7 @@ struct BarRow {
 struct BarChart {
   std::string id;  // the element id (tests and links find charts by it)
   std::string title;
+  std::string subtitle;  // a second line under the title (empty = none)
   std::string x_label;
   // A vertical reference line (e.g. 1 = as fast as Embree), drawn over the bars.
   double reference = std::numeric_limits<double>::quiet_NaN();

@@ -113,12 +113,14 @@ void draw_world_line(Image& img, const ViewProjector& proj, const Vec3f& a0, con
 }
 
 Vec3f depth_colour(int depth, int max_depth) {
-  // Yellow -> orange -> magenta -> blue as depth grows.
+  // Yellow -> orange -> red -> magenta -> blue -> cyan as depth grows: six
+  // hues, so neighbouring levels stay apart up to depth 6 or so.
   const float t = max_depth > 0 ? std::clamp(static_cast<float>(depth) / max_depth, 0.0f, 1.0f) : 0.0f;
-  const Vec3f stops[4] = {Vec3f(1.0f, 0.85f, 0.1f), Vec3f(1.0f, 0.35f, 0.05f), Vec3f(0.85f, 0.1f, 0.6f),
-                          Vec3f(0.15f, 0.35f, 1.0f)};
-  const float x = t * 3.0f;
-  const int i = std::min(2, static_cast<int>(x));
+  static const Vec3f stops[] = {Vec3f(1.0f, 0.9f, 0.1f),  Vec3f(1.0f, 0.45f, 0.02f), Vec3f(0.9f, 0.08f, 0.12f),
+                                Vec3f(0.7f, 0.12f, 0.8f), Vec3f(0.15f, 0.3f, 1.0f),  Vec3f(0.05f, 0.8f, 0.85f)};
+  constexpr int n = 6;
+  const float x = t * (n - 1);
+  const int i = std::min(n - 2, static_cast<int>(x));
   const float f = x - i;
   return (1.0f - f) * stops[i] + f * stops[i + 1];
 }

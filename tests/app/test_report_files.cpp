@@ -84,7 +84,7 @@ TEST(ReportFiles, StructuresMeasuredOnFewerScenesAreChartedApart) {
   ASSERT_FALSE(fewer.empty()) << "no chart for the structures measured on fewer scenes";
   EXPECT_THAT(fewer, HasSubstr(">brute<"));
   EXPECT_THAT(fewer, HasSubstr("1 of 2 scenes"));
-  EXPECT_THAT(fewer, HasSubstr("not comparable with the chart above"));
+  EXPECT_THAT(fewer, HasSubstr("does not compare with the chart above"));
   EXPECT_THAT(chart("chart-memory-fewer-scenes"), HasSubstr(">brute<"));
 }
 
