@@ -2,8 +2,8 @@
 // Text for the picture commands (`raylab show`, `raylab render --aov`
 // legends and titles): DejaVu Sans (Debian's fonts-dejavu-core, embedded in
 // the binary at build time) rasterised by FreeType, so every printable
-// character has its own glyph (a 5x7 bitmap font drew "g" as "9" and had no
-// capitals) and labels keep their proportions at any size.
+// character has its own glyph (a 5x7 bitmap font without descenders cannot
+// tell "g" from "9") and labels keep their proportions at any size.
 #include <string>
 
 #include "base/vec.h"

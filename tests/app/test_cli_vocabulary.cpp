@@ -406,7 +406,7 @@ TEST(CliInterrupt, CtrlCStopsStressInsideARecord) {
 TEST(CliInterrupt, CtrlCStopsARenderAndWritesNoImage) {
   const auto dir = test::temp_dir("int_render");
   const auto png = dir / "r.png";
-  const auto r = interrupt_mid_run({"render", "cornell", "-s", "100000", "--size", "64x64", "-t", "1", "-q", "--timings",
+  const auto r = interrupt_mid_run({"render", "cornell", "-s", "20000", "--size", "64x64", "-t", "1", "-q", "--timings",
                                     (dir / "r.json").string(), "-o", png.string()},
                                    "", 1500);
   EXPECT_EQ(r.exit_code, 130);

@@ -1,7 +1,7 @@
 // The label font of the picture commands (app/label_font.h): every printable
-// ASCII character draws a glyph of its own. The 5x7 bitmap font it replaced
-// drew "g" as "9" ("9rid" for "grid"), capitals as small letters, and
-// nothing at all for [ ] # * ? and the like.
+// ASCII character draws a glyph of its own. A 5x7 bitmap font without
+// descenders draws "g" like "9" ("9rid" for "grid"); a lower-case-only one
+// draws capitals as small letters and [ ] # * ? not at all.
 #include <gtest/gtest.h>
 
 #include <map>

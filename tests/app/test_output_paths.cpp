@@ -1,8 +1,8 @@
 // Output files go where they are asked and nowhere else: an output in a
 // missing directory is bad input (exit 2, a message naming the directory)
 // for every command, and nothing is created, neither the directory nor a
-// temporary file (`render cornell -o /nonexistent_dir/x.png` once returned 0
-// and made the directory). The documented exceptions make only their own
+// temporary file (`render cornell -o /nonexistent_dir/x.png` exits 2 and
+// leaves no /nonexistent_dir). The documented exceptions make only their own
 // folder: render's default out/, report's <name>_files/.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // `raylab report` reads every bench, verify and stress record of a folder,
-// sub-folders included, and lists the files on the page. It once took
-// bench.json or else the first bench file only: with a_bunny.json and
-// b_sponza.json the page said "Scenes: bunny" and dropped Sponza without a
-// word. Reports of different binaries or machines are refused unless --mix,
-// and then the page says so; a merged report's cell files are read once.
+// sub-folders included, and lists the files on the page: two bench files
+// (a_bunny.json, b_sponza.json) give one page over both scenes, not one
+// file's scenes with the other dropped. Reports of different binaries or
+// machines are refused unless --mix, and then the page says so; a merged
+// report's cell files are read once.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 

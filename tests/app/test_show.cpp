@@ -98,8 +98,8 @@ TEST(Show, EveryStructureHasAPicture) {
 }
 
 TEST(Show, ThePngHasATitleAndADepthLegendAtAReadableDefaultSize) {
-  // show once drew at the study's 160 px with a 5x7 font: labels cut ("k-d sp"),
-  // no legend for the depth colours, depth 3 by default where the docs use 4.
+  // The PNG reads at its default size: a title that fits (not cut to "k-d sp"),
+  // a legend for the depth colours, and depth 4 by default, as the docs use.
   const auto dir = test::temp_dir("show_legend");
   const auto r = test::run_raylab("show soup:n=200 --accel kdtree -o " + (dir / "k.png").string() + " -o " +
                                   (dir / "k.pfm").string());

@@ -159,8 +159,8 @@ std::string report_pair(const std::string& name, std::vector<nlohmann::json> a, 
 
 TEST(Compare, MraysAndRatioChangesAreTwoColumnsWhoseSignsAgreeWithTheirHeaders) {
   // Embree ran 35 % slower in B and grid 19 % slower: grid's Mrays/s fell while
-  // its ratio to Embree rose. The old single "speed" column showed +24.6 %
-  // "faster" for a structure whose speed fell.
+  // its ratio to Embree rose. A single "speed" column of the ratio's change
+  // would call +24.6 % "faster" a structure whose speed fell.
   const auto ab = report_pair("drift", {cell("embree", 20.0, 20.0, 5, 0.0, 1), cell("grid", 10.0, 20.0, 5, 0.0, 2)},
                               {cell("embree", 13.0, 13.0, 5, 0.0, 3), cell("grid", 8.1, 13.0, 5, 0.0, 4)});
   const auto r = test::run_raylab("compare " + ab + " --no-noise-floor -o -");
