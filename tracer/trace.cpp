@@ -13,7 +13,13 @@ namespace raylab {
 
 namespace {
 constexpr size_t kChunk = 256;  // rays per batch call: large enough to amortise dispatch
-}
+// With a stop flag (Ctrl-C), chunks are made short enough to end within
+// about this long: the flag is polled between chunks, and brute force over
+// 10^5 triangles takes over a millisecond per ray, a third of a second per
+// chunk of 256. kProbe rays, timed first, give the structure's speed.
+constexpr double kStopLatencyS = 0.02;
+constexpr size_t kProbe = 16;  // a multiple of 16: chunks stay aligned to Embree's widest packets
+}  // namespace
 
 int hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
 
@@ -30,15 +36,31 @@ void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOu
   const size_t n = set.rays.size();
   if (set.occlusion) out.occluded.resize(n);
   else out.hits.resize(n);
-  const size_t chunks = (n + kChunk - 1) / kChunk;
-  std::vector<TraversalStats> per_chunk(stats ? chunks : 0);
-  auto trace_chunk = [&](size_t c) {
-    if (stop && stop->load(std::memory_order_relaxed)) return;
-    const size_t b = c * kChunk, e = std::min(n, b + kChunk);
+  auto trace_range = [&](size_t b, size_t e, TraversalStats* s) {
     const std::span<const Ray> rays(set.rays.data() + b, e - b);
-    TraversalStats* s = stats ? &per_chunk[c] : nullptr;
     if (set.occlusion) accel.occluded_prepared(prepared, b, rays, std::span<uint8_t>(out.occluded.data() + b, e - b), s);
     else accel.intersect_prepared(prepared, b, rays, std::span<Hit>(out.hits.data() + b, e - b), s);
+  };
+  auto stopped = [&] { return stop && stop->load(std::memory_order_relaxed); };
+  // The first kProbe rays, timed, shorten the chunks of a slow structure
+  // (only when a stop flag is given; fast structures keep kChunk).
+  size_t first = 0, chunk = kChunk;
+  TraversalStats probe_stats;
+  if (stop && n > kProbe) {
+    if (stopped()) return;
+    Timer t;
+    trace_range(0, kProbe, stats ? &probe_stats : nullptr);
+    const double per_ray = t.seconds() / kProbe;
+    if (per_ray * kChunk > kStopLatencyS)
+      chunk = std::clamp<size_t>(static_cast<size_t>(kStopLatencyS / per_ray) / kProbe * kProbe, kProbe, kChunk);
+    first = kProbe;
+  }
+  const size_t chunks = (n - first + chunk - 1) / chunk;
+  std::vector<TraversalStats> per_chunk(stats ? chunks : 0);
+  auto trace_chunk = [&](size_t c) {
+    if (stopped()) return;
+    const size_t b = first + c * chunk;
+    trace_range(b, std::min(n, b + chunk), stats ? &per_chunk[c] : nullptr);
   };
   if (threads <= 1) {
     // One thread: a plain loop, no scheduler between the structure and the timer.
@@ -51,8 +73,10 @@ void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOu
       });
     });
   }
-  if (stats)
+  if (stats) {
+    *stats += probe_stats;
     for (const auto& s : per_chunk) *stats += s;
+  }
 }
 
 TraceTiming summarize_times(std::vector<double> times) {

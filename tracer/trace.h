@@ -35,8 +35,9 @@ PreparedSet prepare_set(const Accelerator& accel, const RaySet& set);
 // `prepared` (from prepare_set on the same accelerator and set) the
 // structure traces its own layout. `stop` (Ctrl-C) is polled before every
 // chunk of rays: once it is set the remaining chunks are skipped and `out`
-// is incomplete (the caller checks the flag and discards it), so a long
-// trace ends within one chunk's time.
+// is incomplete (the caller checks the flag and discards it). With a stop
+// flag a slow structure's chunks are shortened (its speed timed on the first
+// rays) to last about 20 ms, so a long trace ends within that of Ctrl-C.
 void trace_set(const Accelerator& accel, const RaySet& set, int threads, TraceOutput& out,
                TraversalStats* stats = nullptr, const PreparedRays* prepared = nullptr,
                const std::atomic<bool>* stop = nullptr);
