@@ -218,7 +218,9 @@ Inputs read_inputs(const fs::path& dir, bool mix) {
       for (const auto& m : j["merged_from"])
         if (m.is_string()) merged_into[rel(f.parent_path() / m.get<std::string>())] = rel(f);
   std::map<std::tuple<std::string, std::string, std::string, double>, std::string> cell_file;  // bench cell -> file
-  for (const auto& [f, j] : docs) {
+  for (const auto& doc : docs) {
+    const fs::path& f = doc.first;  // not a structured binding: the lambdas below capture these
+    const json& j = doc.second;
     SourceFile sf{rel(f), str(j, "command"), j["records"].size(), ""};
     const auto merged = merged_into.find(sf.path);
     auto origin = [&] {
