@@ -2,7 +2,7 @@
 // distances on random soups and the Cornell box; occlusion consistent with
 // closest hit; invalid rays and empty scenes handled. New accelerators are
 // covered automatically through the registry. (Against Embree, through the
-// checks layer's oracle: tests/test_structures_verify.cpp.)
+// checks layer's oracle: tests/checks/test_structures_verify.cpp.)
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // assignment, the 3D-DDA's corner cases, and grid / hashgrid / grid2 against
 // the brute-force reference on Cornell, soups, a flat scene and a teapot in a
 // stadium; memory budget and bad specs (agreement with Embree:
-// tests/test_structures_verify.cpp).
+// tests/checks/test_structures_verify.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -802,7 +802,7 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
     EXPECT_LE(cell_blocks, (sb.extra.at("refs") + 3.0 * runs) / 4.0) << spec;
     EXPECT_EQ(static_cast<double>(sb.bytes),
               static_cast<double>(si.bytes) - 4.0 * sb.extra.at("refs") - m.num_triangles() * sizeof(LeafTriangle) +
-                  cell_blocks * sizeof(KdTriangleBlock))
+                  cell_blocks * sizeof(CellTriangleBlock))
         << spec;
   }
 }

@@ -2,7 +2,7 @@
 // watertight kernel on the same triangles, so a missed cell shows up as a
 // different distance), traversal corner cases at split planes, builder
 // invariants, termination on degenerate inputs, statistics and parameters
-// (agreement with Embree: tests/test_structures_verify.cpp).
+// (agreement with Embree: tests/checks/test_structures_verify.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
