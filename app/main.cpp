@@ -6,8 +6,16 @@
 
 #include <fmt/format.h>
 
+#include "accel/core/simd/instruction_sets.h"
 #include "base/spec.h"
 #include "app/commands.h"
+
+// The first of the program's initialisers (priority 101 runs before the
+// others): a binary compiled for instruction sets this CPU lacks stops here
+// with one line, before any code compiled for them runs.
+[[gnu::constructor(101)]] static void check_instruction_sets() {
+  raylab::exit_unless_cpu_runs_this_binary("raylab");
+}
 
 int main(int argc, char** argv) {
   using namespace raylab::cli;

@@ -186,44 +186,43 @@ size_t closed_sphere_leaks(const std::string& spec, const Vec3f& center, size_t 
   return leaks;
 }
 
-BruteReference brute_reference(const TriangleMesh& mesh, std::span<const Ray> rays) {
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  BruteReference ref{std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size())};
-  brute->intersect(rays, ref.hits);
-  brute->occluded(rays, ref.occluded);
-  return ref;
+std::vector<Ray> rays_at_triangles(const TriangleMesh& mesh, size_t count, uint64_t seed) {
+  Pcg32 rng(seed, 7);
+  const Aabb box = mesh.bounds();
+  const float diag = std::max(box.diagonal().norm(), 1e-3f);
+  std::vector<Ray> rays;
+  for (size_t i = 0; i < count; ++i) {
+    if (i % 3 == 2 || mesh.num_triangles() == 0) {
+      const Vec3f o = box.center() + 0.75f * diag * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
+      rays.emplace_back(o, random_direction(rng));
+      continue;
+    }
+    const size_t tri = rng.next() % mesh.num_triangles();
+    float u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+    if (rng.next() % 4 == 0) u = static_cast<float>(rng.next() % 2), v = 0.0f;
+    const Vec3f p = (1.0f - u - v) * mesh.vertex(tri, 0) + u * mesh.vertex(tri, 1) + v * mesh.vertex(tri, 2);
+    const Vec3f o = p + diag * (0.05f + rng.uniform()) * random_direction(rng);
+    rays.emplace_back(o, p - o);
+  }
+  return rays;
 }
 
-Disagreement compare_with_brute(const Accelerator& accel, const BruteReference& ref, std::span<const Ray> rays,
-                                const std::string& what, float tie_rel) {
-  const size_t n = rays.size();
-  std::vector<Hit> got(n);
-  std::vector<uint8_t> occ(n);
-  accel.intersect(rays, got);
-  accel.occluded(rays, occ);
-  Disagreement d;
-  for (size_t i = 0; i < n; ++i) {
-    const Hit& a = got[i];
-    const Hit& b = ref.hits[i];
-    d.reference_hits += b.valid();
-    const float scale = rays[i].org.cwiseAbs().maxCoeff() + std::fabs(b.t);
-    const bool tie = a.t == b.t || std::fabs(a.t - b.t) <= tie_rel * scale;
-    if (a.valid() != b.valid() || (a.valid() && a.prim != b.prim && !tie)) {
-      if (d.closest++ < 3)
-        ADD_FAILURE() << what << " ray " << i << " org " << rays[i].org.transpose() << " dir "
-                      << rays[i].dir.transpose() << " [" << rays[i].tmin << ", " << rays[i].tmax << "]: got prim "
-                      << a.prim << " t " << a.t << ", brute prim " << b.prim << " t " << b.t;
-    } else if (a.valid() && a.prim == b.prim && (a.t != b.t || a.u != b.u || a.v != b.v)) {
-      if (d.barycentric++ < 3)
-        ADD_FAILURE() << what << " ray " << i << " prim " << a.prim << ": (t, u, v) = (" << a.t << ", " << a.u << ", "
-                      << a.v << "), brute (" << b.t << ", " << b.u << ", " << b.v << ")";
-    }
-    if ((occ[i] != 0) != b.valid() && d.occlusion++ < 3)
-      ADD_FAILURE() << what << " ray " << i << ": occluded " << int(occ[i]) << " but closest hit "
-                    << (b.valid() ? "hits" : "misses");
-  }
-  return d;
+std::vector<Ray> secondary_rays(const TriangleMesh& mesh, std::span<const Ray> primary, uint64_t seed) {
+  auto brute = make_accelerator("brute");
+  brute->build(mesh);
+  std::vector<Hit> hits(primary.size());
+  brute->intersect(primary, hits);
+  Pcg32 rng(seed, 9);
+  std::vector<Ray> rays;
+  for (size_t i = 0; i < primary.size(); ++i)
+    if (hits[i].valid()) rays.emplace_back(primary[i].at(hits[i].t), random_direction(rng), 0.0f);
+  return rays;
+}
+
+std::string describe_ray(const Ray& r) {
+  return fmt::format("org ({:a} {:a} {:a}) dir ({:a} {:a} {:a}) t [{:a} {:a}]", r.org.x(), r.org.y(), r.org.z(),
+                     r.dir.x(), r.dir.y(), r.dir.z(), r.tmin, r.tmax);
 }
 
 }  // namespace raylab::test

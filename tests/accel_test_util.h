@@ -1,7 +1,7 @@
 #pragma once
-// Helpers of the structure tests (raylab_tests_accel), which link the base
-// and structures layers only: meshes come from base/mesh_shapes.h, rays from
-// here, and the reference answers from the brute-force structure.
+// Meshes and rays for the structure tests (raylab_tests_accel); the answers
+// they are compared with come from brute force (brute_agreement.h), scenes
+// from the scenes layer (scenes/procedural.h).
 #include <cstdint>
 #include <span>
 #include <string>
@@ -75,28 +75,15 @@ std::string gtest_name(const std::string& spec);
 // it is a valid index.
 size_t closed_sphere_leaks(const std::string& spec, const Vec3f& center, size_t rays, size_t remove = SIZE_MAX);
 
-// Closest hits and occlusion answers of the brute-force structure.
-struct BruteReference {
-  std::vector<Hit> hits;
-  std::vector<uint8_t> occluded;
-};
-BruteReference brute_reference(const TriangleMesh& mesh, std::span<const Ray> rays);
+// Rays aimed at points of the mesh's triangles (interior, edges, vertices)
+// from random directions, plus random rays through the box.
+std::vector<Ray> rays_at_triangles(const TriangleMesh& mesh, size_t count, uint64_t seed);
 
-// How far an accelerator's answers are from brute force's. The same
-// watertight test on the same vertices gives the same triangle bit-identical
-// (t, u, v), so a different triangle is accepted only at a tie: the same
-// distance bit for bit or, with tie_rel > 0, within tie_rel of the
-// coordinates involved (|origin| + t): two overlapping coplanar triangles
-// give distances that differ by rounding at that scale, and a structure may
-// cull the second one's box by an ulp once the first is found.
-struct Disagreement {
-  size_t closest = 0;    // different hit/miss, or a different triangle not at a tie
-  size_t barycentric = 0;  // same triangle, different distance or (u, v)
-  size_t occlusion = 0;  // any-hit answer differs from closest hit
-  size_t reference_hits = 0;
-};
-// Reports the first few differences (ADD_FAILURE, prefixed with `what`).
-Disagreement compare_with_brute(const Accelerator& accel, const BruteReference& ref, std::span<const Ray> rays,
-                                const std::string& what, float tie_rel = 0.0f);
+// Secondary rays: from the hit points of `primary` (closest hits by brute
+// force) in random directions, tmin = 0 (rays starting on a surface).
+std::vector<Ray> secondary_rays(const TriangleMesh& mesh, std::span<const Ray> primary, uint64_t seed);
+
+// A ray in hexadecimal floats, for failure messages.
+std::string describe_ray(const Ray& r);
 
 }  // namespace raylab::test

@@ -1,72 +1,65 @@
 #pragma once
-// Exact agreement with brute force, shared by the structure tests
-// (test_kdtree.cpp, and the others through accel_agreement.h): the same
-// watertight kernel on the same triangles, so a node or cell the walk misses
-// shows up as a different distance (compared bit for bit); the triangle may
-// differ only at exactly equal distances.
-#include <cstdio>
+// Agreement with the brute-force structure: the one comparison the structure
+// tests make. Brute force runs the same watertight kernel on the same
+// triangles, so a node or cell a walk misses shows up as a different answer.
+// A structure agrees with it on a ray when
+// - it hits when brute force hits, at the same distance bit for bit, or,
+//   with tie_rel > 0, within tie_rel of the coordinates involved
+//   (|origin| + t): two overlapping coplanar triangles give distances that
+//   differ by rounding at that scale, and a structure may cull the second
+//   one's box by an ulp once the first is found;
+// - it names brute force's triangle with the same (t, u, v), or (unless
+//   same_triangle) another triangle at such a tie;
+// - its any-hit answer is brute force's;
+// - (counting_kernel) its counting kernel answers as its plain one does.
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
 #include <span>
 #include <string>
 #include <vector>
 
-#include "accel/registry.h"
-#include "base/pcg.h"
-#include "tests/test_util.h"
+#include "accel/accelerator.h"
+#include "base/ray.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab::test {
 
-inline void add_triangle(TriangleMesh& m, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-  const auto base = static_cast<uint32_t>(m.vertices.size());
-  m.vertices.insert(m.vertices.end(), {a, b, c});
-  m.triangles.push_back({base, base + 1, base + 2});
-}
+// Closest hits and any-hit answers of the brute-force structure.
+struct BruteReference {
+  std::vector<Hit> hits;
+  std::vector<uint8_t> occluded;
+};
+BruteReference brute_reference(const TriangleMesh& mesh, std::span<const Ray> rays);
 
-inline std::string describe_ray(const Ray& r) {
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), "org (%a %a %a) dir (%a %a %a) t [%a %a]", r.org.x(), r.org.y(), r.org.z(),
-                r.dir.x(), r.dir.y(), r.dir.z(), r.tmin, r.tmax);
-  return buf;
-}
+struct BruteComparison {
+  float tie_rel = 0.0f;
+  bool same_triangle = false;    // another triangle at a tie is a disagreement too
+  bool counting_kernel = false;  // also trace with TraversalStats and compare
+};
 
-// Rays whose closest hit, occlusion or instrumented-kernel answer differs
-// from brute force's (`ref`, `ref_occ`, computed once for several
-// structures): the same hit or miss, the same distance bit for bit, and the
-// same triangle unless another one is hit at exactly that distance. `first`
-// describes the first.
-inline size_t count_brute_mismatches(const Accelerator& accel, std::span<const Hit> ref,
-                                     std::span<const uint8_t> ref_occ, std::span<const Ray> rays,
-                                     std::string* first = nullptr) {
-  const size_t n = rays.size();
-  std::vector<Hit> a(n), c(n);
-  std::vector<uint8_t> occ(n);
-  accel.intersect(rays, a);
-  TraversalStats st;
-  accel.intersect(rays, c, &st);
-  accel.occluded(rays, occ);
-  size_t bad = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const bool same = a[i].valid() == ref[i].valid() && (!a[i].valid() || a[i].t == ref[i].t);
-    const bool same_counted = c[i].valid() == a[i].valid() && c[i].t == a[i].t && c[i].prim == a[i].prim;
-    if (same && same_counted && occ[i] == ref_occ[i]) continue;
-    if (bad++ == 0 && first) {
-      char buf[200];
-      std::snprintf(buf, sizeof(buf), " -> (%d, t %a, prim %u) brute (%d, t %a, prim %u) occluded %d brute %d",
-                    a[i].valid(), a[i].t, a[i].prim, ref[i].valid(), ref[i].t, ref[i].prim, occ[i], ref_occ[i]);
-      *first = describe_ray(rays[i]) + buf;
-    }
-  }
-  return bad;
-}
+struct Disagreement {
+  size_t closest = 0;      // different hit or miss, or another triangle (not at an accepted tie)
+  size_t barycentric = 0;  // the same triangle at a different (t, u, v)
+  size_t occlusion = 0;    // any-hit answer differs from brute force's
+  size_t counted = 0;      // the counting kernel's closest hit differs from the plain kernel's
+  size_t reference_hits = 0;
+  std::string examples;  // the first three disagreements, one line each
+  size_t total() const { return closest + barycentric + occlusion + counted; }
+};
 
-inline size_t count_brute_mismatches(const Accelerator& accel, const TriangleMesh& mesh, std::span<const Ray> rays,
-                                     std::string* first = nullptr) {
-  auto brute = make_accelerator("brute");
-  brute->build(mesh);
-  std::vector<Hit> ref(rays.size());
-  std::vector<uint8_t> ref_occ(rays.size());
-  brute->intersect(rays, ref);
-  brute->occluded(rays, ref_occ);
-  return count_brute_mismatches(accel, ref, ref_occ, rays, first);
-}
+Disagreement compare_with_brute(const Accelerator& accel, const BruteReference& ref, std::span<const Ray> rays,
+                                const BruteComparison& how = {});
+
+// Disagreements of a built structure, counting kernel included, with brute
+// force built on `mesh`; `examples` receives the first ones.
+size_t count_brute_mismatches(const Accelerator& accel, const TriangleMesh& mesh, std::span<const Ray> rays,
+                              std::string* examples = nullptr);
+// The same for the structure made from `spec` and built on `mesh`.
+size_t mismatches_vs_brute(const std::string& spec, const TriangleMesh& mesh, std::span<const Ray> rays,
+                           std::string* examples = nullptr);
+// Each spec's structure agrees with brute force on every ray set given.
+void expect_specs_agree_with_brute(std::span<const char* const> specs, const TriangleMesh& mesh,
+                                   std::initializer_list<std::span<const Ray>> ray_sets);
 
 }  // namespace raylab::test

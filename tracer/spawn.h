@@ -10,7 +10,7 @@
 // 2e-5 (|p|max + |o|max), plus 1e-6 of the scene's diagonal for points near
 // the coordinate origin. As pbrt-v4 (Pharr, Jakob & Humphreys, 4th ed.,
 // "Robust spawned ray origins") the goal is that a ray spawned from a hit
-// never hits the same triangle again (tests/test_tracer.cpp checks it).
+// never hits the same triangle again (tests/tracer/test_tracer.cpp checks it).
 #include "base/aabb.h"
 #include "base/ray.h"
 #include "base/vec.h"

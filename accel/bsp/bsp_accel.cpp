@@ -59,7 +59,7 @@ class BspAccel final : public ViewAccelerator<BspAccel, BspBuildOptions, BspView
     if (leaf_blocks_wanted(simd_, this->triangle_test())) {
       // SIMD leaves (the k-d tree's 4-wide blocks) replace the indices and the triangle copies.
       for (BspPackedNode& n : nodes_)
-        if (n.is_leaf()) n = BspPackedNode::leaf(append_kd_leaf_blocks(mesh, tree.prim_ids.data() + n.first(), n.count(), blocks_), n.count());
+        if (n.is_leaf()) n = BspPackedNode::leaf(append_leaf_blocks<kKdBlockWidth>(mesh, tree.prim_ids.data() + n.first(), n.count(), blocks_), n.count());
     } else {
       // Triangles copied once, in the order the leaves first use them (as the k-d tree does).
       IndexedLeafTriangles leaf_tris = copy_referenced_triangles(mesh, tree.prim_ids);
@@ -166,7 +166,7 @@ AcceleratorInfo bsp_accelerator_info() {
       });
   // Two traversal paths (axis-only trees take only the k-d fast path) and
   // the MT test; other candidate sets use the same code and cost test time
-  // (the BSP build is slow), so they are covered by tests/test_bsp.cpp only.
+  // (the BSP build is slow), so they are covered by tests/accel/bsp/test_bsp.cpp only.
   info.cover = {"bsp:dirs=3,tplanes=0", "bsp:tri=mt", "bsp:simd=0"};
   info.caps.scalar_variant = "simd=0";
   info.stats = tree_stat_infos("triangle references in leaves",

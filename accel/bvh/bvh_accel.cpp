@@ -250,12 +250,7 @@ std::unique_ptr<Kernel> make_quantized_kernel(const WideTree& tree, const Triang
 
 class BvhAccel final : public Accelerator {
  public:
-  explicit BvhAccel(const BvhConfig& c) : cfg_(c) {
-    if (!simd::isa_supported_by_cpu())
-      throw std::runtime_error(fmt::format("bvh: this binary was built for {} but the CPU does not support it "
-                                           "(rebuild with -DRAYLAB_NATIVE=ON on this machine)",
-                                           simd::isa_name()));
-  }
+  explicit BvhAccel(const BvhConfig& c) : cfg_(c) {}
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const override {
     if (!kernel_) throw std::logic_error("bvh: intersect before build");

@@ -5,6 +5,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "accel/core/simd/leaf_blocks.h"
+
 namespace raylab {
 
 template <int N, int W>
@@ -19,17 +21,11 @@ WideBvh<N, W> make_wide_bvh(const WideTree& t, const TriangleMesh& mesh, bool ed
   }
   if (first_block[leaves] > wide_ref::kFirstBlockMask) throw std::length_error("wide bvh: too many triangle blocks");
   out.blocks.resize(first_block[leaves]);
+  const BlockVertices stored = edges ? BlockVertices::Edges : BlockVertices::Corners;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const uint32_t* prims = t.leaf_prims.data() + t.leaf_begin[i];
-      const int count = static_cast<int>(t.leaf_size(i));
-      const auto vertex = [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); };
-      for (int b = 0; b < count; b += W) {
-        TriangleBlock<W>& blk = out.blocks[first_block[i] + b / W];
-        if (edges) fill_block_mt<W>(blk, prims + b, std::min(W, count - b), vertex);
-        else fill_block<W>(blk, prims + b, std::min(W, count - b), vertex);
-      }
-    }
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      fill_leaf_blocks<W>(mesh, t.leaf_prims.data() + t.leaf_begin[i], static_cast<uint32_t>(t.leaf_size(i)),
+                          out.blocks.data() + first_block[i], stored);
   });
   auto leaf_ref = [&](uint32_t leaf) {
     return wide_ref::leaf(first_block[leaf], first_block[leaf + 1] - first_block[leaf]);

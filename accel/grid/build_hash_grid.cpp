@@ -12,7 +12,7 @@
 
 #include "accel/grid/cell_blocks.h"
 #include "accel/core/grid/cell_overlap.h"
-#include "accel/grid/exclusive_scan.h"
+#include "accel/core/grid/exclusive_scan.h"
 #include "accel/grid/grid_build_start.h"
 #include "accel/core/grid/grid_stats.h"
 
@@ -61,7 +61,7 @@ uint64_t blocks_of_key_runs(const std::vector<KeyRef>& pairs, KeyOf key) {
   uint64_t blocks = 0;
   for (size_t i = 0, j = 0; i < pairs.size(); i = j) {
     for (j = i + 1; j < pairs.size() && key(pairs[j]) == key(pairs[i]);) ++j;
-    blocks += kd_leaf_blocks(static_cast<uint32_t>(j - i));
+    blocks += cell_block_count(static_cast<uint32_t>(j - i));
   }
   return blocks;
 }
@@ -108,7 +108,7 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
       // Runs of equal keys -> occupied cells.
       occupied = count_key_runs(pairs, key_of);
       uint64_t peak = pairs.size() * (sizeof(KeyRef) + sizeof(uint32_t)) + 2 * occupied * sizeof(CellSlot);
-      if (opt.leaf_blocks()) peak += blocks_of_key_runs(pairs, key_of) * sizeof(KdTriangleBlock);
+      if (opt.leaf_blocks()) peak += blocks_of_key_runs(pairs, key_of) * sizeof(CellTriangleBlock);
       if (peak <= start.budget) break;
     }
     std::vector<KeyRef>().swap(pairs);
@@ -148,7 +148,7 @@ HashGrid build_hash_grid(const TriangleMesh& mesh, const GridOptions& opt, Build
   }
   stats.extra["cell_blocks"] = static_cast<double>(g.blocks.size());
   stats.bytes = g.table.bytes() + g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle) +
-                g.blocks.capacity() * sizeof(KdTriangleBlock) + sizeof(HashGrid);
+                g.blocks.capacity() * sizeof(CellTriangleBlock) + sizeof(HashGrid);
   return g;
 }
 

@@ -225,7 +225,7 @@ double fill_subgrids(std::vector<SubGridPlan>& plans, const TwoLevelGrid& g, con
     if (!over && opt.leaf_blocks()) {
       uint64_t blocks = 0;
       for (const CellLists& l : lists) blocks += blocks_of_runs(l.offsets);
-      over = blocks * sizeof(KdTriangleBlock) > budget - fixed;
+      over = blocks * sizeof(CellTriangleBlock) > budget - fixed;
     }
     if (!over) return lambda;
     if (lambda < 1e-9) throw budget_error(opt, n);
@@ -321,7 +321,7 @@ void to_blocks(const TriangleMesh& mesh, TwoLevelGrid& g, BuildStats& stats) {
     c.large_count = cb.block_at[c.large_begin + c.large_count] - first;
     c.large_begin = first;
   }
-  stats.bytes += cb.blocks.capacity() * sizeof(KdTriangleBlock);
+  stats.bytes += cb.blocks.capacity() * sizeof(CellTriangleBlock);
   stats.bytes -= g.refs.capacity() * sizeof(uint32_t) + g.tris.capacity() * sizeof(LeafTriangle);
   g.blocks = std::move(cb.blocks);
   std::vector<uint32_t>().swap(g.refs);
@@ -343,10 +343,10 @@ TwoLevelGrid build_two_level_grid(const TriangleMesh& mesh, const GridOptions& o
   uint64_t large_refs = 0, large_blocks = 0;
   for (const auto& p : plans) {
     large_refs += p.large.size();
-    large_blocks += kd_leaf_blocks(static_cast<uint32_t>(p.large.size()));
+    large_blocks += cell_block_count(static_cast<uint32_t>(p.large.size()));
   }
   const uint64_t top_bytes = total_cells(top.res) * sizeof(uint32_t) + plans.size() * sizeof(TopCellContent) +
-                             (opt.leaf_blocks() ? large_blocks * sizeof(KdTriangleBlock) : large_refs * sizeof(uint32_t));
+                             (opt.leaf_blocks() ? large_blocks * sizeof(CellTriangleBlock) : large_refs * sizeof(uint32_t));
   if (top_bytes >= start.budget) throw budget_error(opt, n);
   bool sub_capped = false;
   std::vector<CellLists> lists;

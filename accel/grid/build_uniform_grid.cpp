@@ -29,7 +29,7 @@ UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt,
     const uint64_t offset_bytes = (g.dda.cells() + 1) * sizeof(uint32_t);
     const uint64_t max_refs = budget > offset_bytes ? (budget - offset_bytes) / reference_bytes(opt.leaf_blocks()) : 0;
     if (build_cell_lists(g.dda, opt.assign, g.tris, ids, max_refs, g.lists) &&
-        (!opt.leaf_blocks() || offset_bytes + blocks_of_runs(g.lists.offsets) * sizeof(KdTriangleBlock) <= budget))
+        (!opt.leaf_blocks() || offset_bytes + blocks_of_runs(g.lists.offsets) * sizeof(CellTriangleBlock) <= budget))
       break;
     // Too many references: halve the cells and try again.
     start.shrink(opt, chosen, max_cells, "grid", "references");
@@ -55,7 +55,7 @@ UniformGrid build_uniform_grid(const TriangleMesh& mesh, const GridOptions& opt,
   }
   stats.extra["cell_blocks"] = static_cast<double>(g.blocks.size());
   stats.bytes = g.lists.bytes() + g.tris.capacity() * sizeof(LeafTriangle) +
-                g.blocks.capacity() * sizeof(KdTriangleBlock) + g.clearance.capacity() + sizeof(UniformGrid);
+                g.blocks.capacity() * sizeof(CellTriangleBlock) + g.clearance.capacity() + sizeof(UniformGrid);
   return g;
 }
 

@@ -17,7 +17,7 @@
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/huge_page_allocator.h"
-#include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/grid/cell_blocks.h"
 
 namespace raylab {
 
@@ -28,7 +28,7 @@ struct HashGrid {
   CellHashTable table;
   std::vector<uint32_t> refs;  // triangle ids, grouped by occupied cell
   std::vector<LeafTriangle> tris;
-  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
+  HugePageVector<CellTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h)
   bool empty = true;
 };
 

@@ -3,7 +3,7 @@
 // hash table by its linear index; a cell that is not stored is empty.
 #include <cstdint>
 
-#include "accel/core/grid/grid_ray_query.h"
+#include "accel/grid/traverse_single_level_grid.h"
 #include "accel/grid/hash_grid.h"
 
 namespace raylab {

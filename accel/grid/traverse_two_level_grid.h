@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "accel/core/grid/grid_ray_query.h"
+#include "accel/core/leaf_block_dispatch.h"
 #include "accel/grid/two_level_grid.h"
 
 namespace raylab {
@@ -22,7 +23,7 @@ struct TwoLevelGridView {
   const uint32_t* offsets = nullptr;
   const uint32_t* refs = nullptr;
   const LeafTriangle* tris = nullptr;
-  const KdTriangleBlock* blocks = nullptr;  // set when the cells are SIMD blocks
+  const CellTriangleBlock* blocks = nullptr;  // set when the cells are SIMD blocks
   bool empty = true;
 };
 
@@ -47,7 +48,7 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
   const double t0 = seg.t0, t1 = seg.t1;
   // Not through walk_grid: one lambda less around the nested walks keeps
   // them inlined (measured 12 % faster on the bunny).
-  GridRayQuery<kTest, Recorder, kBlocks> q(ray, stats);
+  GridRayQuery<kTest, Recorder, kBlocks, kCellBlockWidth> q(ray, stats);
   q.t_base = line.t_base;
   Recorder& rec = q.rec;
   {

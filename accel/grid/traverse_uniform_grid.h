@@ -3,7 +3,7 @@
 // compressed rows (offsets[cell] .. offsets[cell + 1] in refs, or in blocks).
 #include <cstdint>
 
-#include "accel/core/grid/grid_ray_query.h"
+#include "accel/grid/traverse_single_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 
 namespace raylab {

@@ -30,7 +30,7 @@
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/huge_page_allocator.h"
-#include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/grid/cell_blocks.h"
 
 namespace raylab {
 
@@ -61,7 +61,7 @@ struct TwoLevelGrid {
   std::vector<LeafTriangle> tris;
   // With SIMD blocks (options.leaf_blocks()) offsets, large_begin and
   // large_count count blocks, and refs and tris are empty.
-  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
+  HugePageVector<CellTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h)
   bool empty = true;
 };
 

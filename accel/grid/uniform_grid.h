@@ -10,7 +10,7 @@
 #include "accel/grid/grid_options.h"
 #include "accel/core/leaf_triangle.h"
 #include "accel/core/huge_page_allocator.h"
-#include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/grid/cell_blocks.h"
 
 namespace raylab {
 
@@ -20,7 +20,7 @@ struct UniformGrid {
   // refs and tris are empty.
   CellLists lists;
   std::vector<LeafTriangle> tris;
-  HugePageVector<KdTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h), as the BVH's
+  HugePageVector<CellTriangleBlock> blocks;  // on huge pages (huge_page_allocator.h)
   // With empty-space skipping (skip=1): per cell the distance to the nearest
   // occupied cell (cell_clearance.h).
   std::vector<uint8_t> clearance;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <new>
 #include <stdexcept>
 
 #include <tbb/blocked_range.h>
@@ -10,6 +12,7 @@
 
 #include "accel/core/grid/cell_overlap.h"
 #include "accel/core/grid/grid_stats.h"
+#include "accel/core/simd/leaf_blocks.h"
 
 namespace raylab {
 
@@ -471,11 +474,10 @@ void IrgridBuilder::make_leaf_blocks(const TriangleMesh& mesh) {
     IrgridChunk* slab = g_.slabs.data() + at[i];
     c.begin = static_cast<uint32_t>(at[i] + 1);
     new (slab) IrgridCell(c);
-    for (uint32_t k = 0; k < c.count; k += kIrgridBlockWidth) {
-      auto* blk = new (slab + 1 + (k / kIrgridBlockWidth) * kIrgridChunksPerBlock) IrgridTriangleBlock;
-      fill_block<kIrgridBlockWidth>(*blk, ids + k, static_cast<int>(std::min<uint32_t>(c.count - k, kIrgridBlockWidth)),
-                                    [&](uint32_t prim, int corner) -> const Vec3f& { return mesh.vertex(prim, corner); });
-    }
+    // The blocks follow the record, kIrgridChunksPerBlock chunks each.
+    auto* blocks = reinterpret_cast<IrgridTriangleBlock*>(slab + 1);
+    std::uninitialized_default_construct_n(blocks, irgrid_blocks(c.count));
+    fill_leaf_blocks<kIrgridBlockWidth>(mesh, ids, c.count, std::launder(blocks));
   });
   auto to_slab = [&](uint32_t& e) {
     if (!(e & kIrgridInnerNode)) e = static_cast<uint32_t>(at[e]);

@@ -96,7 +96,7 @@ AcceleratorInfo irgrid_accelerator_info() {
         opt.expand = p.boolean("expand");
         return std::make_unique<IrgridAccel>(opt, parse_triangle_test(p), parse_simd(p), parse_any_hit_order(p));
       });
-  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0", "irgrid:anyhit=front", "irgrid:anyhit=back"};  // both off: tests/test_irgrid.cpp
+  info.cover = {"irgrid:merge=0", "irgrid:expand=0", "irgrid:simd=0", "irgrid:anyhit=front", "irgrid:anyhit=back"};  // both off: tests/accel/irgrid/test_irgrid.cpp
   info.caps.scalar_variant = "simd=0";
   info.stats = {{"cells", "cells after merging"},
                 {"nonempty_cells", "cells holding triangles"},

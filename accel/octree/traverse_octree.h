@@ -172,7 +172,7 @@ inline int octree_child_order_scalar(float t0, float t1, const float near_end[3]
 // does not apply to leave the lane unchanged. Profiling the scalar loop on
 // the stadium showed the compiler's partial vectorisation of it stalling on
 // store-to-load forwarding (~20% of the walk); this form has no such
-// round trip. tests/test_octree.cpp compares the two on random and
+// round trip. tests/accel/octree/test_octree.cpp compares the two on random and
 // non-finite inputs.
 [[gnu::always_inline]] inline int octree_child_order(float t0, float t1, const float near_end[3],
                                                     const float far_start[3], uint32_t neg_mask, uint32_t mask,

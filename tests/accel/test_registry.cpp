@@ -2,7 +2,8 @@
 // distances on random soups and the Cornell box; occlusion consistent with
 // closest hit; invalid rays and empty scenes handled. New accelerators are
 // covered automatically through the registry. (Against Embree, through the
-// checks layer's oracle: tests/test_structures_verify.cpp.)
+// checks layer's oracle: tests/checks/test_structures_verify.cpp.)
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,10 +16,13 @@
 #include "base/mesh_shapes.h"
 #include "base/pcg.h"
 #include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
 #include "tests/test_util.h"
 
 namespace raylab {
 namespace {
+
+using ::testing::HasSubstr;
 
 class EveryAccelerator : public ::testing::TestWithParam<std::string> {};
 
@@ -30,9 +34,8 @@ void expect_same_as_brute(const test::NamedMesh& scene, const std::string& spec,
                           bool expect_hits = true) {
   auto accel = make_accelerator(spec);
   accel->build(scene.mesh);
-  const test::Disagreement d =
-      test::compare_with_brute(*accel, test::brute_reference(scene.mesh, rays), rays, spec + " on " + scene.name);
-  EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << spec << " on " << scene.name;
+  const test::Disagreement d = test::compare_with_brute(*accel, test::brute_reference(scene.mesh, rays), rays);
+  EXPECT_EQ(d.total(), 0u) << spec << " on " << scene.name << ":\n" << d.examples;
   if (expect_hits) {
     EXPECT_GT(d.reference_hits, rays.size() / 20) << "ray set too easy: few hits on " << scene.name;
   }
@@ -88,9 +91,8 @@ void expect_extreme_rays_agree(const std::string& spec, const std::string& what,
                                const std::vector<Ray>& rays, size_t min_hits) {
   auto accel = make_accelerator(spec);
   accel->build(mesh);
-  const test::Disagreement d =
-      test::compare_with_brute(*accel, test::brute_reference(mesh, rays), rays, spec + " on " + what);
-  EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << spec << " on " << what;
+  const test::Disagreement d = test::compare_with_brute(*accel, test::brute_reference(mesh, rays), rays);
+  EXPECT_EQ(d.total(), 0u) << spec << " on " << what << ":\n" << d.examples;
   EXPECT_GE(d.reference_hits, min_hits) << what;
   // A hit's distance is a finite float: triangles met beyond FLT_MAX are misses (hit_recorder.h).
   std::vector<Hit> hits(rays.size());
@@ -205,9 +207,9 @@ TEST_P(EveryAccelerator, RaysFromFarAwayAgreeWithBruteForce) {
     }
   auto accel = make_accelerator(GetParam());
   accel->build(mesh);
-  const test::Disagreement d = test::compare_with_brute(*accel, test::brute_reference(mesh, axis_rays), axis_rays,
-                                                        GetParam() + " on axis rays from far away", 0x1p-20f);
-  EXPECT_EQ(d.closest + d.barycentric + d.occlusion, 0u) << GetParam();
+  const test::Disagreement d =
+      test::compare_with_brute(*accel, test::brute_reference(mesh, axis_rays), axis_rays, {.tie_rel = 0x1p-20f});
+  EXPECT_EQ(d.total(), 0u) << GetParam() << " on axis rays from far away:\n" << d.examples;
   EXPECT_GT(d.reference_hits, axis_rays.size() * 9 / 10);
   std::vector<Hit> hits(oblique_rays.size());
   std::vector<uint8_t> occ(oblique_rays.size());
@@ -328,13 +330,82 @@ TEST(Registry, CoverageSpecsAllBuildAndNameTheirStructure) {
   }
 }
 
-}  // namespace
-}  // namespace raylab
+TEST(Registry, UnknownNamesAndParametersListWhatExists) {
+  try {
+    make_accelerator(kReservedUnknownAccelerator);
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(std::string("unknown accelerator '") + kReservedUnknownAccelerator + "'"));
+    EXPECT_THAT(e.what(), HasSubstr("bvh"));
+    EXPECT_THAT(e.what(), HasSubstr("embree"));
+  }
+  try {
+    make_accelerator("bvh:leef=3");
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown parameter 'leef'"));
+    EXPECT_THAT(e.what(), HasSubstr("leaf"));
+  }
+  EXPECT_THROW(make_accelerator("bvh:leaf=abc"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:leaf=0"), SpecError);
+  EXPECT_THROW(make_accelerator("embree:quality=ultra"), SpecError);
+  EXPECT_THROW(make_accelerator("embree:robust=maybe"), SpecError);
+}
 
-namespace raylab {
-namespace {
+// The registry states every parameter's valid values (only res=AxBxC is
+// free text, parsed by the grids), and every default is one of them.
+TEST(Registry, EveryParameterDeclaresItsValidValues) {
+  for (const auto& info : accelerator_registry())
+    for (const auto& p : info.params) {
+      EXPECT_TRUE(p.check.kind != ParamKind::Text || p.name == "res") << info.name << ":" << p.name;
+      EXPECT_TRUE(p.check.accepts(p.default_value)) << info.name << ":" << p.name << "=" << p.default_value;
+    }
+}
 
-// Issue 17: a structure's scalar variant (caps.scalar_variant, "simd=0")
+TEST(Registry, AllExpandsToEveryAccelerator) {
+  const auto all = expand_accelerator_list("all");
+  EXPECT_EQ(all.size(), accelerator_registry().size());
+  EXPECT_EQ(all.front(), "embree");
+  EXPECT_THROW(expand_accelerator_list("bvh,nope"), SpecError);
+  EXPECT_THROW(expand_accelerator_list(""), SpecError);
+}
+
+TEST(Registry, SweepReplacesTheParameterWhereDeclared) {
+  const auto specs = apply_sweep({"embree", "bvh:bins=8"}, "leaf", {"1", "2"});
+  EXPECT_THAT(specs, ::testing::ElementsAre("embree", "bvh:bins=8,leaf=1", "bvh:bins=8,leaf=2"));
+  EXPECT_THROW(apply_sweep({"embree"}, "leaf", {"1"}), SpecError);
+  EXPECT_THROW(apply_sweep({"bvh"}, "leaf", {"x"}), SpecError);
+}
+
+TEST(Registry, SpecOfCreatedAcceleratorIsCanonical) {
+  EXPECT_EQ(make_accelerator("bvh:leaf=2,bins=8")->spec(), "bvh:bins=8,leaf=2");
+}
+
+// A bad value's message names the structure, the parameter, what is valid and
+// what was given ("OWNER: KEY must be VALID, got VALUE").
+TEST(Registry, ParameterErrorsSayWhatIsValid) {
+  try {
+    make_accelerator("bsp:tplanes=65");
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_STREQ(e.what(), "bsp: tplanes must be in 0..64, got 65");
+  }
+  try {
+    make_accelerator("kdtree:max_depth=65");
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_STREQ(e.what(), "kdtree: max_depth must be auto or in 0..64, got 65");
+  }
+  try {
+    make_accelerator("bvh:bins=x");
+    FAIL() << "no exception";
+  } catch (const SpecError& e) {
+    EXPECT_STREQ(e.what(), "bvh: bins must be in 2..256, got x (not an integer)");
+  }
+}
+
+
+// A structure's scalar variant (caps.scalar_variant, "simd=0")
 // runs the same algorithm and the same triangle test without SIMD kernels,
 // so it must give exactly the same hits (distance, barycentrics, triangle),
 // the same occlusion answers and the same counted work as the default.

@@ -1,6 +1,6 @@
 #include "accel/core/grid/cell_lists.h"
 
-#include "accel/grid/exclusive_scan.h"
+#include "accel/core/grid/exclusive_scan.h"
 
 #include <algorithm>
 #include <atomic>

@@ -1,9 +1,8 @@
 #pragma once
-// The per-ray state every grid kernel carries through its walk: the triangle
-// test's precomputation, the mailbox, and the hit recorder (which owns hit
-// acceptance and the counters, accel/core/hit_recorder.h); and the walk of a
-// single-level grid, shared by `grid` and `hashgrid`, which differ only in
-// how a cell's triangle list is found.
+// The per-ray state every grid kernel (grid, hgrid, irgrid) carries through
+// its walk: the triangle test's precomputation, the mailbox, and the hit
+// recorder (which owns hit acceptance and the counters,
+// accel/core/hit_recorder.h); and the frame of every grid walk (walk_grid).
 //
 // Termination rule (closest hit): after a cell's triangles are tested, the
 // walk stops only if the closest hit so far lies within the part of the ray
@@ -15,22 +14,21 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "accel/core/simd/triangle_block.h"
-#include "accel/core/hit_recorder.h"
-#include "accel/core/leaf_block_dispatch.h"
-#include "accel/core/leaf_triangle.h"
 #include "accel/core/grid/dda.h"
 #include "accel/core/grid/mailbox.h"
-#include "accel/kdtree/kd_leaf_blocks.h"
+#include "accel/core/hit_recorder.h"
+#include "accel/core/leaf_triangle.h"
+#include "accel/core/simd/triangle_block.h"
 
 namespace raylab {
 
 // kBlocks: the grid's cells hold SIMD triangle blocks of kBlockWidth lanes
-// (cell_blocks.h: the k-d tree's 4; the irregular grid's slabs: 8; simd=1
-// with the watertight test) instead of ids into triangle copies.
-template <TriangleTest kTest, typename Recorder, bool kBlocks = false, int kBlockWidth = kKdBlockWidth>
+// (the grids' cell_blocks.h: 4; the irregular grid's slabs: 8; simd=1 with
+// the watertight test) instead of ids into triangle copies.
+template <TriangleTest kTest, typename Recorder, bool kBlocks = false, int kBlockWidth = 0>
 struct GridRayQuery {
   static_assert(!kBlocks || kTest == TriangleTest::Watertight, "the SIMD blocks run the watertight test");
+  static_assert(!kBlocks || kBlockWidth > 0, "cells of blocks name their width");
   struct NoBlockRay {};
   const Ray& ray;
   TrianglePrecompute<kTest> pre;
@@ -65,12 +63,12 @@ struct GridRayQuery {
   // were all tested is skipped; one with a new triangle is tested whole (a
   // triangle tested again gives the same (t, id), which the recorder does
   // not take twice) and counts its new triangles, as the scalar walk does.
-  bool test_cell(const KdTriangleBlock* blocks, uint32_t count) {
+  bool test_cell(const TriangleBlock<kBlockWidth>* blocks, uint32_t count) {
     for (uint32_t b = 0; b < count; ++b) {
       const uint32_t fresh = mailbox.fresh(blocks[b].prim);
       if (fresh == 0) continue;
       rec.count_triangles(fresh);
-      if (intersect_block_record<kKdBlockWidth>(blocks[b], block_ray, ray.tmin, rec)) {
+      if (intersect_block_record<kBlockWidth>(blocks[b], block_ray, ray.tmin, rec)) {
         if constexpr (Recorder::kStopAtFirstHit) return true;
       }
     }
@@ -98,28 +96,12 @@ struct GridRayQuery {
   }
 };
 
-// A single-level grid as its walk sees it; `Cells` finds a cell's run of
-// references (dense compressed rows, or a hash table of occupied cells):
-// ids into `tris`, or with `blocks` (cell_blocks.h) blocks.
-template <typename Cells>
-struct SingleLevelGridView {
-  DdaGrid dda;
-  Cells cells;
-  const uint32_t* refs = nullptr;
-  const LeafTriangle* tris = nullptr;
-  const KdTriangleBlock* blocks = nullptr;  // set when the cells are SIMD blocks
-  // Per cell, the distance to the nearest occupied cell (cell_clearance.h),
-  // when the walk skips empty space.
-  const uint8_t* clearance = nullptr;
-  bool empty = true;
-};
-
 // The frame of every grid walk: the recorder, the validity check, the ray's
 // line (rebased when it comes from far away, dda_line) clipped to the grid's
 // box; `walk(dr, t0, t1, query)` then walks the cells of [t0, t1] and the
 // recorder's hit is the answer.
 template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, bool kFarFirst = false,
-          int kBlockWidth = kKdBlockWidth, typename Walk>
+          int kBlockWidth = 0, typename Walk>
 [[gnu::always_inline]] inline Hit walk_grid(const DdaGrid& grid, bool empty, const Ray& ray, TraversalStats* stats,
                                             Walk&& walk) {
   using Recorder = HitRecorder<kAnyHit, kCount>;
@@ -137,38 +119,6 @@ template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kBlocks = false, b
   const DdaSegment s = walk_order<kFarFirst>(line.ray, t0, t1);
   walk(s.ray, s.t0, s.t1, q);
   return q.rec.hit();
-}
-
-// Closest-hit / any-hit walk of a single-level grid: the cells of the
-// 3D-DDA (dda.h), each non-empty cell's triangles tested (mailboxed), the
-// stopping rule above; with a clearance per cell, empty cubes are crossed
-// in one jump (dda_walk_skipping), and a cell's clearance says whether it
-// is empty before its list is looked up.
-template <TriangleTest kTest, bool kAnyHit, bool kCount, bool kFarFirst, typename Cells>
-inline Hit traverse_grid(const SingleLevelGridView<Cells>& g, const Ray& ray, TraversalStats* stats) {
-  return walk_with_leaf_blocks<kTest>(g, [&]<bool kBlocks>() {
-    return walk_grid<kTest, kAnyHit, kCount, kBlocks, kFarFirst>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0,
-                                                                                    double t1, auto& q) {
-      const auto visit = [&](int64_t cell, double, double t_exit) __attribute__((always_inline)) {
-        q.rec.count_nodes(1);
-        uint32_t begin, count;
-        if (!g.cells.find(cell, begin, count)) return false;
-        return q.visit_run(g, begin, count, t_exit);
-      };
-      if (g.clearance) {
-        dda_walk_skipping(g.dda, dr, t0, t1, [&](int64_t cell) { return g.clearance[cell]; },
-                          [&](int64_t cell, double t_enter, double t_exit) __attribute__((always_inline)) {
-                            if (g.clearance[cell] != 0) {
-                              q.rec.count_nodes(1);
-                              return false;
-                            }
-                            return visit(cell, t_enter, t_exit);
-                          });
-      } else {
-        dda_walk(g.dda, dr, t0, t1, visit);
-      }
-    });
-  });
 }
 
 }  // namespace raylab

@@ -1,15 +1,16 @@
 #pragma once
-// Thin SIMD layer for the wide BVH kernels: float vectors of width 4, 8 and 16
-// with the few operations the node and triangle tests need. Comparisons return
-// plain bit masks (bit i = lane i), so kernels branch on integers.
+// Thin SIMD layer for the vector kernels (the wide BVH's node tests, the
+// triangle blocks of every structure with SIMD leaves): float vectors of
+// width 4, 8 and 16 with the few operations the node and triangle tests
+// need. Comparisons return plain bit masks (bit i = lane i), so kernels
+// branch on integers.
 //
 // The ISA is chosen when the project is compiled (RAYLAB_NATIVE builds with
 // -march=native): AVX-512 (F+VL+DQ+BW) uses mask registers for comparisons and
 // 512-bit vectors for width 16; AVX2+FMA uses 256-bit vectors and movemask;
 // anything else falls back to plain arrays the compiler may vectorise.
-// simd_isa_name() reports which one was compiled in, and
-// simd_isa_supported_by_cpu() checks at run time that the CPU can run it, so a
-// binary copied to an older machine fails with a message instead of SIGILL.
+// isa_name() reports which one was compiled in; that the CPU can run it is
+// checked once at start-up, for every kernel (instruction_sets.h).
 //
 // No operation here contracts a*b+c implicitly: fmadd() is explicit and only
 // used where the caller has accounted for its rounding (the slab test); the
@@ -58,22 +59,6 @@ inline int isa_bits() {
   return 128;
 #else
   return 32;
-#endif
-}
-
-// True when the running CPU supports the instruction set compiled in.
-inline bool isa_supported_by_cpu() {
-#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
-#if defined(RAYLAB_SIMD_AVX512)
-  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
-#elif defined(RAYLAB_SIMD_AVX2)
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#else
-  return true;
-#endif
-#else
-  return true;
 #endif
 }
 

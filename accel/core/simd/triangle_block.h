@@ -1,8 +1,9 @@
 #pragma once
-// Leaf triangles of the wide BVH layouts, W at a time: a TriangleBlock holds
-// the vertices of up to W triangles in structure-of-arrays order, and
-// intersect_block() runs the watertight test of Woop, Benthin & Wald (JCGT
-// 2013) on all W lanes at once.
+// Leaf triangles W at a time, for every structure with SIMD leaves (the wide
+// BVH, the k-d tree and BSP tree, the grids, the octrees; leaf_blocks.h fills
+// them): a TriangleBlock holds the vertices of up to W triangles in
+// structure-of-arrays order, and intersect_block() runs the watertight test
+// of Woop, Benthin & Wald (JCGT 2013) on all W lanes at once.
 //
 // The vector test computes exactly what the scalar intersect_watertight()
 // computes, lane by lane: the same translation p - org, the same fused shear,

@@ -13,10 +13,14 @@
 #include "accel/bsp/bsp_packed_node.h"
 #include "accel/bsp/build_bsp.h"
 #include "accel/bsp/convex_polytope.h"
+#include "accel/registry.h"
 #include "base/mesh_shapes.h"
+#include "base/pcg.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_registry.h"
-#include "tests/accel_agreement.h"
+#include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
+#include "tests/test_util.h"
 
 namespace raylab {
 namespace {

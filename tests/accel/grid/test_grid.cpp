@@ -1,32 +1,25 @@
-// Grids (issue 3): the resolution rule, the triangle/box overlap test, cell
-// assignment, the 3D-DDA's corner cases, and grid / hashgrid / grid2 against
-// the brute-force reference on Cornell, soups, a flat scene and a teapot in a
-// stadium; memory budget and bad specs (agreement with Embree:
-// tests/test_structures_verify.cpp).
+// The grids (grid, hashgrid, grid2) against the brute-force reference on
+// Cornell, soups, a flat scene and a teapot in a stadium; statistics, memory
+// budget and bad specs (agreement with Embree:
+// tests/checks/test_structures_verify.cpp; the machinery they share with the
+// other grid structures: tests/accel/core/grid/).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 #include <tuple>
 #include <vector>
 
-#include "accel/grid/cell_clearance.h"
-#include "accel/core/grid/cell_overlap.h"
-#include "accel/core/grid/dda.h"
-#include "accel/core/grid/grid_resolution.h"
 #include "accel/grid/hash_grid.h"
-#include "accel/core/tri_box_overlap.h"
 #include "accel/grid/two_level_grid.h"
 #include "accel/grid/uniform_grid.h"
 #include "accel/registry.h"
 #include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
 #include "tests/test_util.h"
 
 namespace raylab {
 namespace {
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
 
 using test::kStadiumObject;
 
@@ -38,20 +31,13 @@ using test::flat_tiles_mesh;
 using test::mesh_test_rays;
 using test::teapot_in_stadium_mesh;
 
-struct Mismatches {
-  size_t closest = 0, occlusion = 0, rays = 0;
-};
-
-Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays,
-                              const test::BruteReference& ref) {
+// The grid made from `spec` against brute force; overlapping coplanar
+// triangles tie up to rounding of the coordinates (1e-6).
+test::Disagreement grid_vs_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays,
+                                 const test::BruteReference& ref) {
   auto accel = make_accelerator(spec);
   accel->build(mesh);
-  const test::Disagreement d = test::compare_with_brute(*accel, ref, rays, spec, 1e-6f);
-  return {d.closest, d.occlusion, rays.size()};
-}
-
-Mismatches compare_with_brute(const TriangleMesh& mesh, const std::string& spec, const std::vector<Ray>& rays) {
-  return compare_with_brute(mesh, spec, rays, test::brute_reference(mesh, rays));
+  return test::compare_with_brute(*accel, ref, rays, {.tie_rel = 1e-6f});
 }
 
 const std::vector<std::string> kGridSpecs = {"grid", "hashgrid", "grid2", "grid:assign=bbox", "hashgrid:density=4",
@@ -60,404 +46,10 @@ const std::vector<std::string> kGridSpecs = {"grid", "hashgrid", "grid2", "grid:
 void expect_all_agree(const TriangleMesh& mesh, const std::vector<Ray>& rays, const std::string& what) {
   const test::BruteReference reference = test::brute_reference(mesh, rays);
   for (const auto& spec : kGridSpecs) {
-    const Mismatches m = compare_with_brute(mesh, spec, rays, reference);
-    EXPECT_EQ(m.closest, 0u) << spec << " on " << what << " (" << m.rays << " rays)";
-    EXPECT_EQ(m.occlusion, 0u) << spec << " on " << what;
+    const test::Disagreement m = grid_vs_brute(mesh, spec, rays, reference);
+    EXPECT_EQ(m.closest, 0u) << spec << " on " << what << " (" << rays.size() << " rays):\n" << m.examples;
+    EXPECT_EQ(m.occlusion, 0u) << spec << " on " << what << ":\n" << m.examples;
   }
-}
-
-// ---------------------------------------------------------------------------
-// Resolution rule
-
-TEST(GridResolution, RuleGivesAboutLambdaNCubicCells) {
-  // Cubic cells: V = 8, s = (8 / 8000)^(1/3) = 0.1 -> 40x20x10 = 8000 cells.
-  const GridRes r = resolution_by_density(Vec3d(4, 2, 1), 8000, 1.0);
-  EXPECT_EQ(r, (GridRes{40, 20, 10}));
-  const GridRes r8 = resolution_by_density(Vec3d(4, 2, 1), 8000, 8.0);
-  EXPECT_EQ(r8, (GridRes{80, 40, 20}));
-  const GridRes small = resolution_by_density(Vec3d(1, 1, 1), 1000, 0.125);
-  EXPECT_EQ(small, (GridRes{5, 5, 5}));
-}
-
-TEST(GridResolution, FlatLineAndPointBoxesNeverDivideByZero) {
-  EXPECT_EQ(resolution_by_density(Vec3d(1, 1, 0), 100, 1.0), (GridRes{10, 10, 1}));
-  EXPECT_EQ(resolution_by_density(Vec3d(0, 2, 1), 200, 1.0), (GridRes{1, 20, 10}));
-  EXPECT_EQ(resolution_by_density(Vec3d(5, 0, 0), 50, 1.0), (GridRes{50, 1, 1}));
-  EXPECT_EQ(resolution_by_density(Vec3d(0, 0, 0), 1000, 1.0), (GridRes{1, 1, 1}));
-  EXPECT_EQ(resolution_by_density(Vec3d(1, 1, 1), 0, 1.0), (GridRes{1, 1, 1}));
-  // A nearly flat box: the thin side is shorter than a cell and gets one.
-  const GridRes thin = resolution_by_density(Vec3d(1, 1, 1e-6), 10000, 1.0);
-  EXPECT_EQ(thin, (GridRes{100, 100, 1}));
-}
-
-TEST(GridResolution, BudgetLowersLambda) {
-  const ChosenResolution c = choose_resolution(Vec3d(1, 1, 1), 1e6, 8.0, 100000);
-  EXPECT_TRUE(c.capped);
-  EXPECT_LE(total_cells(c.res), 100000u);
-  EXPECT_GT(total_cells(c.res), 50000u);  // lowered to about the budget, not far below
-  EXPECT_LT(c.lambda, 8.0);
-  const ChosenResolution free = choose_resolution(Vec3d(1, 1, 1), 1000, 1.0, 1u << 20);
-  EXPECT_FALSE(free.capped);
-  EXPECT_EQ(free.lambda, 1.0);
-  const ChosenResolution r = cap_resolution(GridRes{1000, 1000, 1000}, 1000000);
-  EXPECT_TRUE(r.capped);
-  EXPECT_LE(total_cells(r.res), 1000000u);
-  EXPECT_GE(total_cells(r.res), 500000u);
-}
-
-TEST(GridResolution, ParsesAndRejectsResolutionStrings) {
-  EXPECT_EQ(parse_grid_resolution("64x64x32"), (GridRes{64, 64, 32}));
-  EXPECT_EQ(parse_grid_resolution("1X2x3"), (GridRes{1, 2, 3}));
-  for (const char* bad : {"64x64", "0x1x1", "axbxc", "64x64x32x2", "-1x2x3", "2000000x1x1", "", "4x4x", "4 x4x4"})
-    EXPECT_THROW(parse_grid_resolution(bad), SpecError) << bad;
-}
-
-// ---------------------------------------------------------------------------
-// Triangle/box overlap and cell assignment
-
-TEST(TriangleBoxOverlap, SeparatingAxisCases) {
-  const Vec3d lo(0, 0, 0), hi(1, 1, 1);
-  // All vertices outside, the triangle slices through the box.
-  EXPECT_TRUE(triangle_box_overlap(lo, hi, {-5, -5, 0.5}, {5, -5, 0.5}, {0, 5, 0.5}));
-  // Touching a face counts as overlap.
-  EXPECT_TRUE(triangle_box_overlap(lo, hi, {1, 0.2, 0.2}, {2, 0.2, 0.8}, {1, 0.8, 0.5}));
-  // Separated along a box normal (the bounds do not overlap in x).
-  EXPECT_FALSE(triangle_box_overlap(lo, hi, {1.4, 1.4, -1}, {1.4, 1.4, 3}, {3, -1, 1}));
-  // Bounds overlap, but the plane x+y+z = 3.1 passes beyond the corner (1,1,1).
-  EXPECT_FALSE(triangle_box_overlap(lo, hi, {3.1, 0, 0}, {0, 3.1, 0}, {0, 0, 3.1}));
-  // The plane x+y+z = 2.5 cuts off the corner and the triangle contains (5/6, 5/6, 5/6).
-  EXPECT_TRUE(triangle_box_overlap(lo, hi, {2.5, 0, 0}, {0, 2.5, 0}, {0, 0, 2.5}));
-  // Edge-axis separation: bounds overlap and the plane z = 0.5 cuts the box,
-  // but the triangle lies beyond x + y = 3.3; only the axis edge x z-normal
-  // (proportional to (1, 1, 0)) separates it.
-  EXPECT_FALSE(triangle_box_overlap(lo, hi, {0.8, 2.5, 0.5}, {2.5, 0.8, 0.5}, {2.5, 2.5, 0.5}));
-  // The same triangle moved until its hypotenuse passes through the box.
-  EXPECT_TRUE(triangle_box_overlap(lo, hi, {0.2, 1.6, 0.5}, {1.6, 0.2, 0.5}, {2.5, 2.5, 0.5}));
-  // A degenerate triangle (segment) through the box, and a point outside.
-  EXPECT_TRUE(triangle_box_overlap(lo, hi, {-1, 0.5, 0.5}, {2, 0.5, 0.5}, {0.5, 0.5, 0.5}));
-  EXPECT_FALSE(triangle_box_overlap(lo, hi, {2, 2, 2}, {2, 2, 2}, {2, 2, 2}));
-}
-
-// Reference: clip the triangle polygon against the box's six planes
-// (Sutherland-Hodgman); the triangle overlaps when something is left.
-bool clip_overlap(const Vec3d& lo, const Vec3d& hi, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  std::vector<Vec3d> poly = {a, b, c};
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      std::vector<Vec3d> out;
-      auto inside = [&](const Vec3d& p) { return side == 0 ? p[axis] >= lo[axis] : p[axis] <= hi[axis]; };
-      const double plane = side == 0 ? lo[axis] : hi[axis];
-      for (size_t i = 0; i < poly.size(); ++i) {
-        const Vec3d& p = poly[i];
-        const Vec3d& q = poly[(i + 1) % poly.size()];
-        if (inside(p)) out.push_back(p);
-        if (inside(p) != inside(q)) {
-          const double t = (plane - p[axis]) / (q[axis] - p[axis]);
-          Vec3d x = p + t * (q - p);
-          x[axis] = plane;
-          out.push_back(x);
-        }
-      }
-      poly = std::move(out);
-      if (poly.empty()) return false;
-    }
-  return true;
-}
-
-TEST(TriangleBoxOverlap, AgreesWithPolygonClippingOnRandomTriangles) {
-  Pcg32 rng(3, 7);
-  const Vec3d lo(0, 0, 0), hi(1, 1, 1);
-  size_t overlaps = 0, checked = 0;
-  for (int i = 0; i < 20000; ++i) {
-    Vec3d v[3];
-    const Vec3d c(3 * rng.uniform() - 1, 3 * rng.uniform() - 1, 3 * rng.uniform() - 1);
-    for (auto& p : v) p = c + Vec3d(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * 2.0;
-    const bool sat = triangle_box_overlap(lo, hi, v[0], v[1], v[2]);
-    // Decided cases only: the answer must not change under a tiny shrink/grow.
-    const double e = 1e-9;
-    const bool grown = clip_overlap(lo.array() - e, hi.array() + e, v[0], v[1], v[2]);
-    const bool shrunk = clip_overlap(lo.array() + e, hi.array() - e, v[0], v[1], v[2]);
-    if (grown != shrunk) continue;
-    ++checked;
-    overlaps += sat;
-    EXPECT_EQ(sat, grown) << "triangle " << i;
-  }
-  EXPECT_GT(checked, 19000u);
-  EXPECT_GT(overlaps, 2000u);  // both outcomes are exercised
-  EXPECT_LT(overlaps, checked - 2000u);
-}
-
-TEST(CellAssignment, ExactCellsEqualBruteForceSatAndAreWithinBbox) {
-  const DdaGrid g = make_dda_grid(Vec3d(0, 0, 0), Vec3d(1, 2, 1), GridRes{12, 9, 16});
-  Pcg32 rng(9, 1);
-  size_t bbox_total = 0, exact_total = 0;
-  for (int i = 0; i < 300; ++i) {
-    const Vec3f c(rng.uniform(), 2 * rng.uniform(), rng.uniform());
-    const float s = (i % 10 == 0) ? 1.5f : 0.3f;  // some triangles span many cells
-    const Vec3f p0 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
-    const Vec3f p1 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
-    const Vec3f p2 = c + s * Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
-    std::set<std::tuple<int, int, int>> exact, bbox, brute;
-    for_each_assigned_cell(g, AssignMode::Exact, p0, p1, p2, [&](int x, int y, int z) {
-      EXPECT_TRUE(exact.insert({x, y, z}).second) << "cell listed twice";
-    });
-    for_each_assigned_cell(g, AssignMode::Bbox, p0, p1, p2, [&](int x, int y, int z) { bbox.insert({x, y, z}); });
-    const Vec3d margin = assignment_margin(g);
-    for (int z = 0; z < g.res[2]; ++z)
-      for (int y = 0; y < g.res[1]; ++y)
-        for (int x = 0; x < g.res[0]; ++x) {
-          const Vec3d lo(g.boundary(0, x) - margin[0], g.boundary(1, y) - margin[1], g.boundary(2, z) - margin[2]);
-          const Vec3d hi(g.boundary(0, x + 1) + margin[0], g.boundary(1, y + 1) + margin[1],
-                         g.boundary(2, z + 1) + margin[2]);
-          if (triangle_box_overlap(lo, hi, p0.cast<double>(), p1.cast<double>(), p2.cast<double>()))
-            brute.insert({x, y, z});
-        }
-    EXPECT_EQ(exact, brute) << "triangle " << i;
-    EXPECT_TRUE(std::includes(bbox.begin(), bbox.end(), exact.begin(), exact.end()));
-    bbox_total += bbox.size();
-    exact_total += exact.size();
-  }
-  EXPECT_LT(exact_total, bbox_total);  // the exact test does drop cells
-}
-
-// ---------------------------------------------------------------------------
-// 3D-DDA on its own
-
-struct Visit {
-  int64_t cell;
-  double t_enter, t_exit;
-};
-
-std::vector<Visit> walk(const DdaGrid& g, const Ray& r) {
-  std::vector<Visit> out;
-  const DdaRay dr(r);
-  double t0 = r.tmin, t1 = r.tmax;
-  if (!dda_clip(dr, g.lo, g.hi, t0, t1)) return out;
-  dda_walk(g, dr, t0, t1, [&](int64_t c, double te, double tx) {
-    out.push_back({c, te, tx});
-    return false;
-  });
-  return out;
-}
-
-std::tuple<int, int, int> coords(const DdaGrid& g, int64_t c) {
-  return {static_cast<int>(c % g.res[0]), static_cast<int>((c / g.res[0]) % g.res[1]),
-          static_cast<int>(c / (static_cast<int64_t>(g.res[0]) * g.res[1]))};
-}
-
-// Checks the walk's invariants and returns the cells visited for a positive length.
-std::vector<int64_t> check_walk(const DdaGrid& g, const Ray& r, const std::vector<Visit>& v) {
-  std::vector<int64_t> cells;
-  for (size_t i = 0; i < v.size(); ++i) {
-    EXPECT_LE(v[i].t_enter, v[i].t_exit + 1e-12) << "visit " << i;
-    if (i > 0) {
-      EXPECT_EQ(v[i].t_enter, v[i - 1].t_exit) << "visit " << i;
-      const auto [x0, y0, z0] = coords(g, v[i - 1].cell);
-      const auto [x1, y1, z1] = coords(g, v[i].cell);
-      EXPECT_EQ(std::abs(x1 - x0) + std::abs(y1 - y0) + std::abs(z1 - z0), 1) << "not face-adjacent at " << i;
-    }
-    if (v[i].t_exit > v[i].t_enter) cells.push_back(v[i].cell);
-    // The middle of the visited interval lies in the visited cell.
-    if (v[i].t_exit > v[i].t_enter && std::isfinite(v[i].t_exit)) {
-      const double tm = 0.5 * (v[i].t_enter + v[i].t_exit);
-      const auto [x, y, z] = coords(g, v[i].cell);
-      const int c[3] = {x, y, z};
-      for (int a = 0; a < 3; ++a) {
-        const double p = static_cast<double>(r.org[a]) + tm * static_cast<double>(r.dir[a]);
-        EXPECT_GE(p, g.boundary(a, c[a]) - 1e-9) << "visit " << i << " axis " << a;
-        EXPECT_LE(p, g.boundary(a, c[a] + 1) + 1e-9) << "visit " << i << " axis " << a;
-      }
-    }
-  }
-  return cells;
-}
-
-const DdaGrid kUnitGrid = make_dda_grid(Vec3d(0, 0, 0), Vec3d(4, 4, 4), GridRes{4, 4, 4});
-
-TEST(Dda, AxisParallelRayVisitsItsRowInOrder) {
-  const auto v = walk(kUnitGrid, Ray(Vec3f(-1, 1.5f, 2.5f), Vec3f(1, 0, 0)));
-  const auto cells = check_walk(kUnitGrid, Ray(Vec3f(-1, 1.5f, 2.5f), Vec3f(1, 0, 0)), v);
-  ASSERT_EQ(cells.size(), 4u);
-  for (int x = 0; x < 4; ++x) EXPECT_EQ(cells[x], kUnitGrid.index(x, 1, 2));
-  EXPECT_DOUBLE_EQ(v.front().t_enter, 1.0);
-  EXPECT_DOUBLE_EQ(v.back().t_exit, 5.0);
-  // Backwards along -y.
-  const Ray back(Vec3f(0.5f, 10, 3.5f), Vec3f(0, -2, 0));
-  const auto cb = check_walk(kUnitGrid, back, walk(kUnitGrid, back));
-  ASSERT_EQ(cb.size(), 4u);
-  for (int y = 0; y < 4; ++y) EXPECT_EQ(cb[y], kUnitGrid.index(0, 3 - y, 3));
-}
-
-TEST(Dda, PlusAndMinusZeroComponentsWalkTheSameCells) {
-  for (const float zero : {0.0f, -0.0f}) {
-    const Ray r(Vec3f(-1, 2.5f, 0.5f), Vec3f(1, zero, zero));
-    const auto cells = check_walk(kUnitGrid, r, walk(kUnitGrid, r));
-    ASSERT_EQ(cells.size(), 4u) << "zero sign " << std::signbit(zero);
-    for (int x = 0; x < 4; ++x) EXPECT_EQ(cells[x], kUnitGrid.index(x, 2, 0));
-    const Ray r2(Vec3f(1.5f, 1.5f, 7), Vec3f(zero, zero, -1));
-    const auto c2 = check_walk(kUnitGrid, r2, walk(kUnitGrid, r2));
-    ASSERT_EQ(c2.size(), 4u);
-    EXPECT_EQ(c2.front(), kUnitGrid.index(1, 1, 3));
-  }
-}
-
-TEST(Dda, OriginsExactlyOnCellBoundaries) {
-  // Starting on the plane x = 2 going +x: first cell with length is x = 2.
-  const Ray fwd(Vec3f(2, 0.5f, 0.5f), Vec3f(1, 0, 0));
-  auto cells = check_walk(kUnitGrid, fwd, walk(kUnitGrid, fwd));
-  ASSERT_EQ(cells.size(), 2u);
-  EXPECT_EQ(cells[0], kUnitGrid.index(2, 0, 0));
-  // The same origin going -x: cells 1 and 0.
-  const Ray bwd(Vec3f(2, 0.5f, 0.5f), Vec3f(-1, 0, 0));
-  cells = check_walk(kUnitGrid, bwd, walk(kUnitGrid, bwd));
-  ASSERT_EQ(cells.size(), 2u);
-  EXPECT_EQ(cells[0], kUnitGrid.index(1, 0, 0));
-  EXPECT_EQ(cells[1], kUnitGrid.index(0, 0, 0));
-  // On a corner of cells going diagonally: 6-connected steps through corners.
-  const Ray diag(Vec3f(1, 1, 1), Vec3f(1, 1, 1));
-  const auto v = walk(kUnitGrid, diag);
-  cells = check_walk(kUnitGrid, diag, v);
-  ASSERT_EQ(cells.size(), 3u);
-  EXPECT_EQ(cells[0], kUnitGrid.index(1, 1, 1));
-  EXPECT_EQ(cells[1], kUnitGrid.index(2, 2, 2));
-  EXPECT_EQ(cells[2], kUnitGrid.index(3, 3, 3));
-  // A ray lying in the boundary plane y = 2 (zero y direction) stays in one row.
-  const Ray plane(Vec3f(-1, 2, 0.5f), Vec3f(1, 0, 0));
-  cells = check_walk(kUnitGrid, plane, walk(kUnitGrid, plane));
-  ASSERT_EQ(cells.size(), 4u);
-  // On the outer boundary of the grid (x = 4 exactly, going -x) starts inside.
-  const Ray edge(Vec3f(4, 3.5f, 3.5f), Vec3f(-1, 0, 0));
-  cells = check_walk(kUnitGrid, edge, walk(kUnitGrid, edge));
-  ASSERT_EQ(cells.size(), 4u);
-  EXPECT_EQ(cells[0], kUnitGrid.index(3, 3, 3));
-}
-
-TEST(Dda, RaysMissingThePointingAwayOrOutsideTheWindow) {
-  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 5, 2), Vec3f(1, 0, 0))).empty());       // beside the grid
-  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(-1, 0, 0))).empty());      // pointing away
-  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(1, 0, 0), 0, 0.5f)).empty());  // tmax before entry
-  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, 2, 2), Vec3f(1, 0, 0), 6, kInf)).empty());  // tmin after exit
-  EXPECT_TRUE(walk(kUnitGrid, Ray(Vec3f(-1, -1, 2), Vec3f(1, 0.01f, 0))).empty());  // passes below
-}
-
-TEST(Dda, TminTmaxWindowLimitsTheCells) {
-  const Ray r(Vec3f(-1, 0.5f, 0.5f), Vec3f(1, 0, 0), 2.5f, 3.5f);  // x in [1.5, 2.5]
-  const auto v = walk(kUnitGrid, r);
-  const auto cells = check_walk(kUnitGrid, r, v);
-  ASSERT_EQ(cells.size(), 2u);
-  EXPECT_EQ(cells[0], kUnitGrid.index(1, 0, 0));
-  EXPECT_EQ(cells[1], kUnitGrid.index(2, 0, 0));
-  EXPECT_DOUBLE_EQ(v.front().t_enter, 2.5);
-  EXPECT_DOUBLE_EQ(v.back().t_exit, 3.5);
-  // Starting inside the grid (tmin = 0 inside): the first cell is the origin's.
-  const Ray in(Vec3f(2.5f, 1.5f, 0.5f), Vec3f(-1, 1, 0));
-  const auto ci = check_walk(kUnitGrid, in, walk(kUnitGrid, in));
-  ASSERT_FALSE(ci.empty());
-  EXPECT_EQ(ci.front(), kUnitGrid.index(2, 1, 0));
-}
-
-TEST(Dda, RandomRaysVisitEveryCellTheyCross) {
-  const DdaGrid g = make_dda_grid(Vec3d(-1, 0, 2), Vec3d(2, 1, 2.5), GridRes{13, 7, 5});
-  Pcg32 rng(21, 3);
-  for (int i = 0; i < 2000; ++i) {
-    const Vec3f org(-2 + 5 * rng.uniform(), -1 + 3 * rng.uniform(), 1.5f + 1.5f * rng.uniform());
-    Vec3f dir = test::random_direction(rng);
-    if (i % 5 == 0) dir[i % 3] = (i % 2) ? 0.0f : -0.0f;
-    if (dir.squaredNorm() == 0) continue;
-    const Ray r(org, dir);
-    const auto v = walk(g, r);
-    const auto cells = check_walk(g, r, v);
-    // Reference: sample the segment densely; every sampled point's cell must
-    // be among the visited ones.
-    const DdaRay dr(r);
-    double t0 = r.tmin, t1 = r.tmax;
-    if (!dda_clip(dr, g.lo, g.hi, t0, t1)) {
-      EXPECT_TRUE(v.empty());
-      continue;
-    }
-    const std::set<int64_t> visited(cells.begin(), cells.end());
-    for (int k = 1; k < 200; ++k) {
-      const double t = t0 + (t1 - t0) * k / 200.0;
-      int c[3];
-      bool on_boundary = false;
-      for (int a = 0; a < 3; ++a) {
-        const double p = dr.org[a] + t * dr.dir[a];
-        const double f = (p - g.lo[a]) * g.inv_cell[a];
-        on_boundary |= std::fabs(f - std::round(f)) < 1e-9;
-        c[a] = g.coord(a, p);
-      }
-      if (on_boundary) continue;
-      EXPECT_TRUE(visited.count(g.index(c[0], c[1], c[2]))) << "ray " << i << " sample " << k;
-    }
-  }
-}
-
-TEST(Dda, ClearanceIsTheChessboardDistanceToTheNearestOccupiedCell) {
-  const DdaGrid g = make_dda_grid(Vec3d(0, 0, 0), Vec3d(1, 1, 1), GridRes{17, 9, 12});
-  Pcg32 rng(4, 9);
-  std::vector<uint8_t> occupied(g.cells());
-  for (auto& o : occupied) o = rng.uniform() < 0.01f;
-  const std::vector<uint8_t> d = cell_clearance(g, [&](int64_t c) { return occupied[c] != 0; });
-  ASSERT_EQ(d.size(), g.cells());
-  for (int64_t c = 0; c < static_cast<int64_t>(g.cells()); ++c) {
-    const auto [x, y, z] = coords(g, c);
-    int best = kMaxClearance;
-    for (int64_t o = 0; o < static_cast<int64_t>(g.cells()); ++o) {
-      if (!occupied[o]) continue;
-      const auto [ox, oy, oz] = coords(g, o);
-      best = std::min(best, std::max({std::abs(ox - x), std::abs(oy - y), std::abs(oz - z)}));
-    }
-    ASSERT_EQ(d[c], best) << x << " " << y << " " << z;
-  }
-  // No occupied cell at all: every cell has the cap.
-  const std::vector<uint8_t> none = cell_clearance(g, [](int64_t) { return false; });
-  EXPECT_TRUE(std::all_of(none.begin(), none.end(), [](uint8_t v) { return v == kMaxClearance; }));
-}
-
-TEST(Dda, SkippingWalkVisitsTheSameOccupiedCellsInOrder) {
-  // Sparse occupancy: long empty stretches to jump over, and occupied cells
-  // the walk must not jump past.
-  const DdaGrid g = make_dda_grid(Vec3d(-1, 0, 2), Vec3d(2, 1, 2.5), GridRes{40, 23, 17});
-  Pcg32 rng(8, 1);
-  std::vector<uint8_t> occupied(g.cells());
-  for (auto& o : occupied) o = rng.uniform() < 0.004f;
-  const std::vector<uint8_t> clearance = cell_clearance(g, [&](int64_t c) { return occupied[c] != 0; });
-  size_t jumps = 0, plain_visits = 0, skipping_visits = 0;
-  for (int i = 0; i < 3000; ++i) {
-    // Half from inside the grid's box, half from around it.
-    const float s = i % 2 ? 1.0f : 0.0f;
-    const Vec3f org(-1 - s + (3 + 2 * s) * rng.uniform(), -s + (1 + 2 * s) * rng.uniform(),
-                    2 - s + (0.5f + 2 * s) * rng.uniform());
-    Vec3f dir = test::random_direction(rng);
-    if (i % 5 == 0) dir[i % 3] = (i % 2) ? 0.0f : -0.0f;
-    if (dir.squaredNorm() == 0) continue;
-    const Ray r(org, dir);
-    const DdaRay dr(r);
-    double t0 = r.tmin, t1 = r.tmax;
-    if (!dda_clip(dr, g.lo, g.hi, t0, t1)) continue;
-    std::vector<Visit> plain, skipping;
-    dda_walk(g, dr, t0, t1, [&](int64_t c, double te, double tx) {
-      if (occupied[c]) plain.push_back({c, te, tx});
-      ++plain_visits;
-      return false;
-    });
-    double last_exit = t0;
-    dda_walk_skipping(g, dr, t0, t1, [&](int64_t c) { return clearance[c]; }, [&](int64_t c, double te, double tx) {
-      EXPECT_GE(te, last_exit - 1e-12) << "ray " << i;  // never backwards
-      jumps += te > last_exit + 1e-12;
-      last_exit = tx;
-      if (occupied[c]) skipping.push_back({c, te, tx});
-      ++skipping_visits;
-      return false;
-    });
-    ASSERT_EQ(plain.size(), skipping.size()) << "ray " << i;
-    for (size_t k = 0; k < plain.size(); ++k) {
-      EXPECT_EQ(plain[k].cell, skipping[k].cell) << "ray " << i;
-      EXPECT_NEAR(plain[k].t_exit, skipping[k].t_exit, 1e-9) << "ray " << i;
-    }
-  }
-  EXPECT_GT(jumps, 1500u);
-  EXPECT_LT(skipping_visits, plain_visits / 2);
 }
 
 // ---------------------------------------------------------------------------
@@ -508,9 +100,9 @@ TEST(GridAccel, TeapotInAStadiumAgreesWithBrute) {
   }
   const test::BruteReference reference = test::brute_reference(m, rays);
   for (const auto& spec : {"grid", "hashgrid", "grid2", "grid2:top=0.01"}) {
-    const Mismatches mm = compare_with_brute(m, spec, rays, reference);
-    EXPECT_EQ(mm.closest, 0u) << spec;
-    EXPECT_EQ(mm.occlusion, 0u) << spec;
+    const test::Disagreement mm = grid_vs_brute(m, spec, rays, reference);
+    EXPECT_EQ(mm.closest, 0u) << spec << ":\n" << mm.examples;
+    EXPECT_EQ(mm.occlusion, 0u) << spec << ":\n" << mm.examples;
   }
 }
 
@@ -680,9 +272,9 @@ TEST(GridAccel, OriginsOnCellBoundariesAndRaysAlongThem) {
   }
   const test::BruteReference reference = test::brute_reference(s.mesh, rays);
   for (const auto& spec : {"grid:res=8x8x8", "hashgrid:res=8x8x8", "grid", "grid2"}) {
-    const Mismatches m = compare_with_brute(s.mesh, spec, rays, reference);
-    EXPECT_EQ(m.closest, 0u) << spec;
-    EXPECT_EQ(m.occlusion, 0u) << spec;
+    const test::Disagreement m = grid_vs_brute(s.mesh, spec, rays, reference);
+    EXPECT_EQ(m.closest, 0u) << spec << ":\n" << m.examples;
+    EXPECT_EQ(m.occlusion, 0u) << spec << ":\n" << m.examples;
   }
 }
 
@@ -802,7 +394,7 @@ TEST(GridMemory, HashGridBytesFollowOccupiedCellsDenseGridBytesFollowResolution)
     EXPECT_LE(cell_blocks, (sb.extra.at("refs") + 3.0 * runs) / 4.0) << spec;
     EXPECT_EQ(static_cast<double>(sb.bytes),
               static_cast<double>(si.bytes) - 4.0 * sb.extra.at("refs") - m.num_triangles() * sizeof(LeafTriangle) +
-                  cell_blocks * sizeof(KdTriangleBlock))
+                  cell_blocks * sizeof(CellTriangleBlock))
         << spec;
   }
 }
@@ -830,8 +422,9 @@ TEST(GridBudget, ExceedingTheBudgetLowersDensityWithAWarning) {
       EXPECT_LT(st.extra.at("lambda"), 64.0) << spec;
     }
     // Still correct.
-    const Mismatches m = compare_with_brute(s.mesh, spec, mesh_test_rays(s.mesh, 300, 3));
-    EXPECT_EQ(m.closest, 0u) << spec;
+    const std::vector<Ray> rays = mesh_test_rays(s.mesh, 300, 3);
+    const test::Disagreement m = grid_vs_brute(s.mesh, spec, rays, test::brute_reference(s.mesh, rays));
+    EXPECT_EQ(m.closest, 0u) << spec << ":\n" << m.examples;
   }
   // Within the budget: no warning.
   auto ok = make_accelerator("grid");

@@ -6,7 +6,6 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "accel/registry.h"
 #include "base/pcg.h"
 #include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
 
 namespace raylab {
 namespace {
@@ -33,34 +33,16 @@ Vec3f unit_random(Pcg32& rng) {
 }
 
 // Rays that differ from brute force in hit/miss, distance (bit for bit),
-// triangle, occlusion, or between the plain and the counting kernel.
+// triangle (ties included), occlusion, or between the plain and the counting
+// kernel.
 size_t mismatches(const std::string& spec, const TriangleMesh& mesh, const std::vector<Ray>& rays,
                   const test::BruteReference& ref, std::string& first) {
   auto accel = make_accelerator(spec);
   accel->build(mesh);
-  const size_t n = rays.size();
-  std::vector<Hit> hits(n), counted(n);
-  std::vector<uint8_t> occ(n);
-  accel->intersect(rays, hits);
-  TraversalStats st;
-  accel->intersect(rays, counted, &st);
-  accel->occluded(rays, occ);
-  size_t bad = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const Hit& h = hits[i];
-    const Hit& r = ref.hits[i];
-    const bool same = h.valid() == r.valid() && (!r.valid() || (h.t == r.t && h.prim == r.prim));
-    const bool same_counted = counted[i].valid() == h.valid() && counted[i].t == h.t && counted[i].prim == h.prim;
-    if (same && same_counted && occ[i] == ref.occluded[i]) continue;
-    if (bad++ == 0) {
-      char buf[320];
-      std::snprintf(buf, sizeof(buf), "ray %zu org (%a %a %a) dir (%a %a %a): %s (%d t %a prim %u) brute (%d t %a prim %u)",
-                    i, rays[i].org.x(), rays[i].org.y(), rays[i].org.z(), rays[i].dir.x(), rays[i].dir.y(),
-                    rays[i].dir.z(), spec.c_str(), h.valid(), h.t, h.prim, r.valid(), r.t, r.prim);
-      first = buf;
-    }
-  }
-  return bad;
+  const test::Disagreement d =
+      test::compare_with_brute(*accel, ref, rays, {.same_triangle = true, .counting_kernel = true});
+  first = d.examples;
+  return d.total();
 }
 
 void expect_exact(const TriangleMesh& mesh, const std::vector<Ray>& rays, const std::string& what) {

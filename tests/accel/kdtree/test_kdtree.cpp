@@ -2,7 +2,7 @@
 // watertight kernel on the same triangles, so a missed cell shows up as a
 // different distance), traversal corner cases at split planes, builder
 // invariants, termination on degenerate inputs, statistics and parameters
-// (agreement with Embree: tests/test_structures_verify.cpp).
+// (agreement with Embree: tests/checks/test_structures_verify.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,11 +12,12 @@
 #include <limits>
 #include <thread>
 
+#include "accel/core/clip_triangle.h"
 #include "accel/kdtree/build_sah_events.h"
 #include "accel/kdtree/build_spatial_median.h"
-#include "accel/core/clip_triangle.h"
 #include "accel/kdtree/kd_cache_layout.h"
 #include "accel/registry.h"
+#include "base/mesh_shapes.h"
 #include "tests/accel_test_util.h"
 #include "tests/brute_agreement.h"
 #include "tests/test_util.h"
@@ -49,7 +50,9 @@ Reference brute_force(const TriangleMesh& mesh, std::span<const Ray> rays) { ret
 
 size_t count_mismatches(const Accelerator& kd, const Reference& ref, std::span<const Ray> rays,
                         std::string* first = nullptr) {
-  return test::count_brute_mismatches(kd, ref.hits, ref.occluded, rays, first);
+  const test::Disagreement d = test::compare_with_brute(kd, ref, rays, {.counting_kernel = true});
+  if (first) *first = d.examples;
+  return d.total();
 }
 
 size_t count_mismatches(const Accelerator& kd, const TriangleMesh& mesh, std::span<const Ray> rays,
@@ -150,8 +153,8 @@ TriangleMesh overlapping_planes(size_t n, uint64_t seed) {
   Pcg32 rng(seed, 5);
   for (size_t i = 0; i < n; ++i) {
     const float x = static_cast<float>(rng.next() % 8) / 8.0f;
-    test::add_triangle(m, Vec3f(x, rng.uniform(), rng.uniform()), Vec3f(x, rng.uniform(), rng.uniform()),
-                 Vec3f(x, rng.uniform(), rng.uniform()));
+    append_triangle(m, Vec3f(x, rng.uniform(), rng.uniform()), Vec3f(x, rng.uniform(), rng.uniform()),
+                    Vec3f(x, rng.uniform(), rng.uniform()));
   }
   return m;
 }
@@ -253,7 +256,7 @@ TEST(KdTree, PlanarTrianglesInsideAVolumeGetTheirOwnFlatCells) {
   Pcg32 rng(12, 1);
   for (int i = 0; i < 2000; ++i) {
     const float y = rng.uniform(), z = rng.uniform();
-    test::add_triangle(mesh, Vec3f(0.5f, y, z), Vec3f(0.5f, y + 0.05f, z), Vec3f(0.5f, y, z + 0.05f));
+    append_triangle(mesh, Vec3f(0.5f, y, z), Vec3f(0.5f, y + 0.05f, z), Vec3f(0.5f, y, z + 0.05f));
   }
   const KdTree tree = build_kdtree_sah(mesh, {});
   size_t splits_at_plane = 0, flat_leaves = 0;
@@ -758,7 +761,7 @@ TEST(KdTreeLayout, ClusteredNodesKeepEveryCellAndLeafAndFillCacheLines) {
   EXPECT_LT(clustered_changes, 0.85 * depth_first_changes) << clustered_changes << " vs " << depth_first_changes;
   // A tree that is one leaf stays one node.
   TriangleMesh one;
-  test::add_triangle(one, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+  append_triangle(one, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
   EXPECT_EQ(cluster_kd_nodes(build_kdtree_sah(one, {})).nodes.size(), 1u);
 }
 
@@ -809,14 +812,14 @@ TEST(KdTreeBuilder, DegenerateInputsTerminateWithBoundedDepthAndSize) {
   cases.push_back({"50k copies", triangle_copies_mesh(50000), 1.0});
   {
     TriangleMesh points;  // zero-area triangles, all at the same point
-    for (int i = 0; i < 20000; ++i) test::add_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
+    for (int i = 0; i < 20000; ++i) append_triangle(points, Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.5f, 0.5f, 0.5f));
     cases.push_back({"identical points", points, 1.0});
   }
   {
     TriangleMesh planar;  // two axis-aligned triangles, each duplicated 10000 times
     for (int i = 0; i < 10000; ++i) {
-      test::add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
-      test::add_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 0, 1));
+      append_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+      append_triangle(planar, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 0, 1));
     }
     cases.push_back({"duplicated planar pair", planar, 1.0});
   }

@@ -15,8 +15,12 @@
 #include "accel/octree/build_octree.h"
 #include "accel/octree/traverse_octree.h"
 #include "accel/registry.h"
+#include "base/mesh_shapes.h"
+#include "base/pcg.h"
 #include "scenes/procedural.h"
-#include "tests/accel_agreement.h"
+#include "tests/accel_test_util.h"
+#include "tests/brute_agreement.h"
+#include "tests/test_util.h"
 
 namespace raylab {
 namespace {
@@ -259,7 +263,7 @@ TEST(OctreeBuilder, SahTerminationKeepsOverlappingListsAndSplitsSeparableOnes) {
     // Large triangles through the cube's centre, each crossing six octants.
     const Vec3f n = test::random_direction(rng);
     const Vec3f u = n.unitOrthogonal(), v = n.cross(u);
-    test::add_triangle(planes, 3.0f * u, -1.5f * u + 2.6f * v, -1.5f * u - 2.6f * v);
+    append_triangle(planes, 3.0f * u, -1.5f * u + 2.6f * v, -1.5f * u - 2.6f * v);
   }
   OctreeBuildOptions sah;
   const OctreeTree kept = build_octree(planes, sah);
@@ -280,7 +284,7 @@ TEST(OctreeBuilder, SahTerminationKeepsOverlappingListsAndSplitsSeparableOnes) {
 
 TEST(OctreeBuilder, DegenerateInputsStopAtTheDepthLimit) {
   TriangleMesh mesh;
-  for (int i = 0; i < 200; ++i) test::add_triangle(mesh, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
+  for (int i = 0; i < 200; ++i) append_triangle(mesh, Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));
   auto a = make_accelerator("octree:max_depth=5");
   const BuildStats s = a->build(mesh);
   EXPECT_LE(s.max_depth, 5);
