@@ -11,6 +11,7 @@
 #include "base/timer.h"
 #include "app/commands.h"
 #include "bench/report.h"
+#include "checks/memory_guard.h"
 #include "scenes/scene_registry.h"
 #include "tracer/integrator.h"
 
@@ -105,6 +106,7 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
   rs.seed = o.seed;
   rs.max_depth = o.max_depth;
   rs.progress = !o.quiet && stderr_is_terminal();
+  require_structure_fits(accel->spec(), scene.mesh);
   Timer wall;
   const BuildStats bs = accel->build(scene.mesh);
   const RenderResult r = render(scene, *accel, rs);

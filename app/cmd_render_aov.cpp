@@ -14,6 +14,7 @@
 
 #include "accel/registry.h"
 #include "app/cmd_show_draw.h"
+#include "checks/memory_guard.h"
 #include "tracer/ray_sets.h"
 
 namespace raylab::cli {
@@ -94,6 +95,7 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
   for (const auto& spec : o.accels) {
     auto accel = make_accelerator(spec);
     const bool counts = accelerator_info(Spec::parse(spec).name).caps.per_ray_counters;
+    require_structure_fits(spec, scene.mesh);
     accel->build(scene.mesh);
     Result r{accel->spec(), {}};
     if (o.kind == "time" || counts) r.cost = pixel_costs(*accel, primary, o.kind, o.time_repeats);

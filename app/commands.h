@@ -29,6 +29,7 @@ Runner add_accels(CLI::App& app);
 Runner add_compare(CLI::App& app);
 Runner add_show(CLI::App& app);
 Runner add_report(CLI::App& app);
+Runner add_memory(CLI::App& app);
 
 // "512x384" -> (512, 384); throws CLI::ValidationError style std::invalid_argument.
 std::pair<int, int> parse_size(const std::string& text);
