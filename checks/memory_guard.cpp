@@ -77,7 +77,7 @@ MemoryStep structure_step(const std::string& accel_spec, const TriangleMesh& mes
   if (it == probes.end()) {
     BuildProbe probe;
     try {
-      probe = probe_build_peak(accel_spec, mesh);
+      probe = probe_build_peak(accel_spec, mesh, probe_triangles(mesh.num_triangles()));
     } catch (const std::exception&) {
       // A build that fails on the piece fails on the scene too, where the
       // caller reports it; the registry's figure stands meanwhile.

@@ -18,8 +18,13 @@
 
 namespace raylab {
 
-// Triangles of the larger piece the probe builds on (the smaller has a quarter).
+// Triangles of the larger piece the probe builds on (the smaller has a
+// quarter): at least this many, and at least 1/kProbeFraction of the scene.
+// Some structures need less per triangle as scenes grow (the k-d tree 162
+// bytes on terrain:n=707, 116 on terrain:n=2236, as its trees stop earlier),
+// so the piece is kept within a factor kProbeFraction of the scene.
 inline constexpr size_t kProbeTriangles = size_t{1} << 19;
+inline constexpr size_t kProbeFraction = 32;
 // Scenes with fewer triangles than this use the registry's figure (a probe
 // would cost a noticeable share of their build, and they fit anyway).
 inline constexpr size_t kProbeFromTriangles = size_t{4} << 20;
@@ -46,9 +51,15 @@ struct BuildProbe {
 // growth is the build's own); 0 where the OS gives no peak.
 size_t build_peak_growth(const std::string& accel_spec, const TriangleMesh& piece);
 
-// Builds `accel_spec` on mesh_piece(mesh, count), then on a piece a quarter
-// that size, and returns the difference of their peak growths per triangle
-// (the larger piece's own figure if the difference is not positive).
-BuildProbe probe_build_peak(const std::string& accel_spec, const TriangleMesh& mesh, size_t count = kProbeTriangles);
+// Builds `accel_spec` on a piece of a quarter of `count` triangles (once
+// unmeasured, to set up what a first build sets up, then measured), then on
+// mesh_piece(mesh, count), and returns the difference of their peak growths
+// per triangle (the larger piece's own figure if the difference is not positive).
+BuildProbe probe_build_peak(const std::string& accel_spec, const TriangleMesh& mesh, size_t count);
+
+// The larger piece's size for a scene of `triangles`.
+inline size_t probe_triangles(size_t triangles) {
+  return triangles / kProbeFraction > kProbeTriangles ? triangles / kProbeFraction : kProbeTriangles;
+}
 
 }  // namespace raylab
