@@ -63,9 +63,15 @@ struct AcceleratorInfo {
   // rss_before_build_bytes) and round up. 0 = not declared: bench assumes the
   // largest figure any structure declares.
   double build_peak_bytes_per_triangle = 0;
-  // The same for the scalar variant (caps.scalar_variant), when its layout
-  // is much smaller (the grids' ids against SIMD blocks); 0 = as above.
-  double scalar_build_peak_bytes_per_triangle = 0;
+  // The same for variants whose layout is much smaller: spec parameters
+  // ("simd=0": the grids' ids against SIMD blocks; "compact=1": Embree's
+  // indexed triangles) and their figure. A spec with all of a variant's
+  // parameters gets its figure (the first that matches).
+  struct VariantPeak {
+    std::string params;
+    double bytes_per_triangle = 0;
+  };
+  std::vector<VariantPeak> variant_build_peaks{};
 };
 
 // A name no structure may take: tests use it as "an unknown accelerator"

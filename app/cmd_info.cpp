@@ -11,6 +11,7 @@
 #include "base/timer.h"
 #include "app/commands.h"
 #include "bench/bench_run.h"
+#include "checks/memory_guard.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {
@@ -21,6 +22,7 @@ void print_build_stats(const Scene& s, const std::string& accel_list, int repeat
   for (const auto& spec : expand_accelerator_list(accel_list)) {
     std::vector<std::pair<double, BuildStats>> runs;
     for (int i = 0; i < repeats; ++i) {
+      require_structure_fits(spec, s.mesh);
       auto accel = make_accelerator(spec);
       const BuildStats st = accel->build(s.mesh);
       runs.emplace_back(st.build_ms, st);
@@ -130,6 +132,7 @@ static nlohmann::json accelerators_json() {
     const Capabilities& c = info.caps;
     j["capabilities"] = {{"mt_variant", c.mt_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.mt_variant)},
                          {"robust_variant", c.robust_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.robust_variant)},
+                         {"scalar_variant", c.scalar_variant.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.scalar_variant)},
                          {"per_ray_counters", c.per_ray_counters},
                          {"quadratic", c.quadratic},
                          {"reference", c.reference},

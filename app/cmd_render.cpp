@@ -12,6 +12,7 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "bench/report.h"
+#include "checks/memory_guard.h"
 #include "scenes/scene_registry.h"
 #include "tracer/integrator.h"
 
@@ -133,6 +134,7 @@ int run_render(const RenderOpts& o, const std::vector<std::string>& accels) {
   rs.progress = !o.quiet && stderr_is_terminal();
   InterruptGuard interrupt;  // Ctrl-C: stop within a batch of paths, write nothing, exit 130
   rs.stop = interrupt.flag();
+  require_structure_fits(accel->spec(), scene.mesh);
   Timer wall;
   const BuildStats bs = accel->build(scene.mesh);
   const RenderResult r = render(scene, *accel, rs);

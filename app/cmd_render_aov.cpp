@@ -15,6 +15,7 @@
 #include "accel/registry.h"
 #include "app/cmd_show_draw.h"
 #include "app/commands.h"
+#include "checks/memory_guard.h"
 #include "tracer/ray_sets.h"
 
 namespace raylab::cli {
@@ -104,6 +105,7 @@ int render_cost_aov(const Scene& scene, const AovOptions& o) {
     if (stopped()) break;
     auto accel = make_accelerator(spec);
     const bool counts = accelerator_info(Spec::parse(spec).name).caps.per_ray_counters;
+    require_structure_fits(spec, scene.mesh);
     accel->build(scene.mesh);
     Result r{accel->spec(), {}};
     if (o.kind == "time" || counts) r.cost = pixel_costs(*accel, primary, o.kind, o.time_repeats, o.stop);

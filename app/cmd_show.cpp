@@ -11,6 +11,7 @@
 #include "app/camera_options.h"
 #include "app/cmd_show_draw.h"
 #include "app/commands.h"
+#include "checks/memory_guard.h"
 #include "scenes/scene_registry.h"
 
 namespace raylab::cli {
@@ -72,6 +73,7 @@ Runner add_show(CLI::App& app) {
     Scene scene = load_scene(pick_scene("show", o->scene, o->positional_scene, "cornell"));
     if (!o->up.empty()) apply_up_axis(o->up, scene);
     if (!o->camera.empty()) apply_camera_option(o->camera, scene.view);
+    require_structure_fits(accel->spec(), scene.mesh);
     accel->build(scene.mesh);
     StructureOutline outline;
     accel->outline(o->depth, outline);

@@ -31,13 +31,14 @@ nlohmann::json stress_record_json(const StressRecord& r) {
             {"counts_for_exit", r.counts},
             {"leak_rays", r.leak_rays},
             {"leaks", r.leaks},
-            {"leaks_per_million", r.leaks_per_million()}});
+            {"leaks_per_million", r.leaks_per_million()},
+            {"reference_timed_first", r.reference_timed_first}});
   return j;
 }
 
 Runner add_stress(CLI::App& app) {
   struct Opts {
-    std::string accel = "all", scenario, positional_scenario, out;
+    std::string accel = "all", scenario, positional_scenario, out, scene;
     double ray_scale = 1.0, budget = 2.0;
     uint64_t seed = 1;
     int threads = 0;
@@ -52,6 +53,8 @@ Runner add_stress(CLI::App& app) {
   cmd->add_option("scenario", o->positional_scenario,
                   "scenario names or prefixes, comma separated, or 'all' (the default; see --list)");
   cmd->add_option("--scenario", o->scenario, "the scenarios, as the positional argument");
+  cmd->add_option("--scene", o->scene,
+                  "a scene (spec or file) for the scenarios built on one instead of the Cornell box: rays, far_*, tiny, huge");
   cmd->add_option("--ray-scale", o->ray_scale, "multiply every scenario's ray count")
       ->capture_default_str()
       ->check(CLI::Range(1e-4, 100.0));
@@ -84,6 +87,12 @@ Runner add_stress(CLI::App& app) {
     so.time_budget_s = o->budget;
     so.seed = o->seed;
     so.threads = o->threads;
+    so.scene = o->scene;
+    if (!so.scene.empty())
+      for (const auto& name : so.scenarios)
+        if (!stress_scenario_takes_scene(name))
+          throw std::invalid_argument(fmt::format("--scene: scenario '{}' makes its own scene (a scene is taken by rays, "
+                                                  "far_1e3, far_1e5, far_1e7, tiny and huge)", name));
     InterruptGuard interrupt;  // from here on Ctrl-C keeps the finished records
     std::printf("stress: %zu scenario%s x %zu accelerator%s, reference %s (emb:rob, timed back to back; its "
                 "ratios are to it, not to bench's default embree), judge: exact oracle\n",
@@ -94,13 +103,19 @@ Runner add_stress(CLI::App& app) {
                 "leaks", "leaks/M");
     std::fflush(stdout);
     bool failed = false;
+    size_t n_failed = 0;
     ProgressLine progress("stress", !o->quiet && stderr_is_terminal());
+    CheckReport report("stress", o->out);
     so.stop = interrupt.flag();
     size_t finished = 0;
     so.on_start = [&](const std::string& scenario, const std::string& accel, size_t i, size_t n) {
       progress.update(i, n, fmt::format("scenario {} ({}), {} records done", scenario, accel, finished));
     };
-    const auto records = run_stress(specs, so, [&](const StressRecord& r) {
+    so.on_skip = [&](const StructureSkip& s) {
+      progress.clear();
+      report.skip(s);
+    };
+    auto on_record = [&](const StressRecord& r) {
       ++finished;
       progress.clear();
       std::printf("%-18s %-26s %-11s %9zu %8zu %10.1f %8.2f %8.3g %9.3g %9.3g %7zu %6zu %6zu %6zu %7zu %9.1f%s\n",
@@ -109,21 +124,23 @@ Runner add_stress(CLI::App& app) {
                   r.hit_miss_disagree + r.prim_disagree, r.ties, r.raylab_wrong, r.embree_wrong, r.leaks,
                   r.leaks_per_million(), r.error.empty() ? "" : fmt::format("  ({})", r.error).c_str());
       std::fflush(stdout);
-    });
-    nlohmann::json recs = nlohmann::json::array();
-    size_t n_failed = 0;
-    for (const auto& r : records) {
       if (r.failed()) {
         failed = true;
         n_failed++;
       }
-      recs.push_back(stress_record_json(r));
+      report.add(stress_record_json(r));
+    };
+    try {
+      run_stress(specs, so, on_record);
+    } catch (const MemoryShortage& e) {
+      progress.clear();
+      return report.stop(e);
     }
     progress.clear();
-    if (const int rc = write_check_report("stress", o->out, recs, interrupt.interrupted())) return rc;
-    std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
-                records.size(), n_failed);
-    return failed ? kExitCheckFailed : 0;
+    if (!interrupt.interrupted())
+      std::printf("stress: %zu records, %zu failed (raylab_wrong, occlusion disagreement or watertight leak)\n",
+                  report.records().size(), n_failed);
+    return report.finish(interrupt.interrupted(), failed);
   };
 }
 

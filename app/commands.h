@@ -29,6 +29,7 @@ Runner add_accels(CLI::App& app);
 Runner add_compare(CLI::App& app);
 Runner add_show(CLI::App& app);
 Runner add_report(CLI::App& app);
+Runner add_memory(CLI::App& app);
 
 // The largest image side --size takes (a 65536 x 65536 image is 48 GiB of floats).
 inline constexpr int kMaxImageSide = 65536;

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   add(add_compare, "compare");
   add(add_show, "show");
   add(add_report, "report");
+  add(add_memory, "memory");
 
   std::string names;
   bool known = false;

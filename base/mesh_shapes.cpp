@@ -5,6 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include "base/pcg.h"
+
 namespace raylab {
 
 namespace {
@@ -35,6 +37,25 @@ TriangleMesh triangle_soup_mesh(size_t n, uint64_t seed, float size) {
       q = (c + extent * d).cwiseMax(Vec3f::Zero()).cwiseMin(Vec3f::Ones());
     }
     append_triangle(m, p[0], p[1], p[2]);
+  }
+  return m;
+}
+
+TriangleMesh needles_mesh(size_t n, uint64_t seed, float width) {
+  TriangleMesh m;
+  Pcg32 rng(mix64(seed + 3), 0x511E);
+  for (size_t i = 0; i < n; ++i) {
+    const int axis = static_cast<int>(i % 3);
+    Vec3f a(rng.uniform(), rng.uniform(), rng.uniform()), b(rng.uniform(), rng.uniform(), rng.uniform());
+    a[axis] = 0.0f;
+    b[axis] = 1.0f;
+    Vec3f w = Vec3f::Zero();
+    w[(axis + 1) % 3] = width;
+    const uint32_t base = static_cast<uint32_t>(m.vertices.size());
+    m.vertices.push_back(a);
+    m.vertices.push_back(b);
+    m.vertices.push_back(a + w);
+    m.triangles.push_back({base, base + 1, base + 2});
   }
   return m;
 }

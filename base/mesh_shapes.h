@@ -25,6 +25,11 @@ TriangleMesh triangle_copies_mesh(size_t n);
 // overlapping triangles, all inside the unit square of the plane.
 TriangleMesh coplanar_mesh(size_t n, int grid, int axis, uint64_t seed);
 
+// n needles: long triangles `width` wide between random points on opposite
+// faces of the unit cube (the axis cycles x, y, z), each with its own three
+// vertices: the slivers a structure's boxes and cells bound poorly.
+TriangleMesh needles_mesh(size_t n, uint64_t seed, float width = 1e-4f);
+
 // Closed UV sphere: `segments` around, `rings` from pole to pole; vertices
 // are shared (one per pole), so the surface is exactly closed: every edge
 // belongs to two triangles with identical endpoint coordinates.

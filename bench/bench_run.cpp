@@ -11,8 +11,8 @@
 
 #include "accel/registry.h"
 #include "base/timer.h"
-#include "bench/memory_estimate.h"
-#include "bench/process_memory.h"
+#include "checks/memory_guard.h"
+#include "checks/process_memory.h"
 #include "checks/classify.h"
 #include "tracer/ray_sets.h"
 #include "tracer/trace.h"
@@ -39,11 +39,6 @@ nlohmann::json BenchRecord::to_json() const {
   j["leaves"] = tree_figure_or_null(leaves);
   j["max_depth"] = tree_figure_or_null(max_depth);
   return j;
-}
-
-nlohmann::json BenchSkip::to_json() const {
-  return {{"scene", scene},           {"triangles", triangles},             {"accel", accel},
-          {"reason", reason},         {"estimated_bytes", estimated_bytes}, {"available_bytes", available_bytes}};
 }
 
 namespace {
@@ -84,21 +79,20 @@ Built build_accel(const std::string& spec, const Scene& scene, int repeats) {
 }
 
 // A structure fits when its estimated peak is below the headroom share of
-// what the OS can still give this process (a Slurm job's cgroup included).
+// what the OS can still give this process (a Slurm job's cgroup included):
+// the guard every command shares (checks/memory_guard.h).
 struct MemoryCheck {
-  size_t triangles;
-  double headroom;
-  size_t estimate = 0, available = 0;  // of the last check
+  const TriangleMesh& mesh;
+  MemoryGuard guard;
 
   bool fits(const std::string& spec, size_t extra_room) {
-    estimate = estimate_build_peak_bytes(spec, triangles);
-    available = available_memory_bytes();
-    return headroom <= 0 || static_cast<double>(estimate) <= headroom * static_cast<double>(available + extra_room);
+    MemoryStep step = structure_step(spec, mesh);
+    if (is_reference_spec(spec)) step.what = "the Embree reference";
+    return guard.fits(step, extra_room);
   }
-  std::string needs() const {
-    return fmt::format("needs ~{} by its estimate, {} available", format_gib(static_cast<double>(estimate)),
-                       format_gib(static_cast<double>(available)));
-  }
+  std::string needs() const { return guard.shortage(); }
+  size_t estimate() const { return guard.last_estimate(); }
+  size_t available() const { return guard.last_available(); }
 };
 
 // The fastest Embree mode so far per (set, threads): its ratio to the
@@ -214,15 +208,15 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
   auto stopped = [&] { return o.stop && o.stop->load(); };
   const size_t triangles = scene.num_triangles();
   const std::vector<std::string> accel_specs = bench_specs_for_scene(all_specs, triangles, o);
-  MemoryCheck mem{triangles, o.memory_headroom};
+  MemoryCheck mem{scene.mesh, MemoryGuard(o.memory_headroom)};
   auto skip = [&](const std::string& spec, const std::string& reason, size_t estimate, size_t available) {
     std::fprintf(stderr, "bench: %s on %s: skipped: %s\n", spec.c_str(), scene.name.c_str(), reason.c_str());
     if (on_skip) on_skip(BenchSkip{scene.name, spec, reason, triangles, estimate, available});
   };
   if (!mem.fits(o.embree_spec, 0)) {
     // Without the reference nothing can be timed: every structure is skipped.
-    const std::string reason = "the Embree reference " + mem.needs();
-    for (const auto& spec : accel_specs) skip(spec, reason, mem.estimate, mem.available);
+    const std::string reason = mem.needs();
+    for (const auto& spec : accel_specs) skip(spec, reason, mem.estimate(), mem.available());
     return {};
   }
   say("building embree (reference)");
@@ -265,16 +259,17 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
     size_t rss_before_build = rss_before_embree;
     if (!is_embree) {
       if (!mem.fits(spec, 0)) {
+        const std::string alone = mem.needs();
         if (embree.accel && mem.fits(spec, embree_resident)) {
           // Fits once Embree's memory is returned: time Embree on every
           // (set, threads) now, keep its answers, release it.
           for (size_t s = 0; s < sets.size(); ++s)
             for (int threads : o.threads) embree_timed_first[{s, threads}] = embree_timing(s, threads);
           embree.accel.reset();
-          std::fprintf(stderr, "bench: %s on %s: %s; Embree timed first and released\n", spec.c_str(),
-                       scene.name.c_str(), mem.needs().c_str());
+          std::fprintf(stderr, "bench: %s on %s: %s; fits without Embree: Embree timed first and released\n",
+                       spec.c_str(), scene.name.c_str(), alone.c_str());
         } else {
-          skip(spec, mem.needs(), mem.estimate, mem.available);
+          skip(spec, mem.needs(), mem.estimate(), mem.available());
           continue;
         }
       }
@@ -287,14 +282,14 @@ std::vector<BenchRecord> run_bench(const Scene& scene, const std::vector<std::st
       b = is_embree ? Built{embree.spec, nullptr, embree.stats} : build_accel(spec, scene, o.build_repeats);
     } catch (const std::bad_alloc&) {
       // The estimate was too low: still a record of why, not a crash.
-      skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_gib(static_cast<double>(mem.estimate))),
-           mem.estimate, available_memory_bytes());
+      skip(spec, fmt::format("out of memory while building (estimate was ~{})", format_bytes(static_cast<double>(mem.estimate()))),
+           mem.estimate(), available_memory_bytes());
       continue;
     } catch (const std::exception& e) {
       // A structure that cannot be built on this scene (e.g. a grid whose memory
       // budget cannot hold 10^8 triangles' references): a record of why, and the
       // rest of the matrix still runs. Specs were validated before the scene loaded.
-      skip(spec, fmt::format("build failed: {}", e.what()), mem.estimate, available_memory_bytes());
+      skip(spec, fmt::format("build failed: {}", e.what()), mem.estimate(), available_memory_bytes());
       continue;
     }
     const Accelerator& accel = b.accel ? *b.accel : *embree.accel;

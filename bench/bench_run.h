@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "accel/accelerator.h"
+#include "checks/structure_skip.h"
 #include "tracer/ray_sets.h"
 #include "scenes/scene.h"
 
@@ -47,22 +48,16 @@ struct BenchOptions {
   // (`raylab bench --ray-file`).
   std::vector<RaySet> given_sets;
   // Before each build: skip structures whose estimated peak memory
-  // (bench/memory_estimate.h) exceeds this fraction of the memory still
-  // available (bench/process_memory.h); 0 = never skip. When a structure only
+  // (checks/memory_guard.h) exceeds this fraction of the memory still
+  // available; 0 = never skip. When a structure only
   // fits without the Embree reference resident, Embree is timed on every ray
   // set first and released (records say so: extra embree_timed_first = 1).
   double memory_headroom = 0.95;
 };
 
 // A structure left out of a scene, with the reason ("needs ~31.2 GiB by its
-// estimate, 20.1 GiB available").
-struct BenchSkip {
-  std::string scene, accel, reason;
-  size_t triangles = 0;
-  size_t estimated_bytes = 0, available_bytes = 0;
-
-  nlohmann::json to_json() const;
-};
+// estimate, 20.1 GiB available"): the type verify uses too.
+using BenchSkip = StructureSkip;
 
 struct BenchRecord {
   std::string scene, accel, ray_set;

@@ -18,6 +18,7 @@
 #include "base/timer.h"
 #include "checks/classify.h"
 #include "checks/oracle.h"
+#include "checks/process_memory.h"
 #include "tracer/trace.h"
 
 namespace raylab {
@@ -152,10 +153,19 @@ bool build_for_stress(const std::string& spec_text, const TriangleMesh& mesh, St
   }
 }
 
+// The reference's speed: timed back to back with each structure on the same
+// rays while it is in memory; after it was released to make room, its time
+// on every ray of the scenario (full_s), scaled to the traced subset.
+struct ReferenceTiming {
+  const Accelerator* accel = nullptr;
+  double full_s = 0;
+  size_t full_rays = 0;
+};
+
 // Probes the speed on a strided sample, then traces the whole set or, if
 // that would exceed the time budget, a strided subset; times the
 // accelerator and the reference back to back on the same rays.
-StressRun trace_for_stress(const Accelerator& accel, const Accelerator& reference, const std::vector<Ray>& rays,
+StressRun trace_for_stress(const Accelerator& accel, const ReferenceTiming& reference, const std::vector<Ray>& rays,
                            const StressOptions& opt, int threads, StressRecord& rec) {
   const size_t n = rays.size();
   size_t stride = 1;
@@ -178,7 +188,10 @@ StressRun trace_for_stress(const Accelerator& accel, const Accelerator& referenc
   const double first_s = timed_trace(accel, set, threads, run.out, opt.stop);
   const int repeats = first_s < 0.2 ? 3 : 1;
   const double acc_s = time_trace(accel, set, threads, repeats, nullptr, 0.0, opt.stop).median_s;
-  const double emb_s = time_trace(reference, set, threads, repeats, nullptr, 0.0, opt.stop).median_s;
+  const double emb_s = reference.accel ? time_trace(*reference.accel, set, threads, repeats, nullptr, 0.0, opt.stop).median_s
+                                       : reference.full_s * static_cast<double>(set.rays.size()) /
+                                             static_cast<double>(std::max<size_t>(1, reference.full_rays));
+  rec.reference_timed_first = reference.accel == nullptr;
   RaySet occ_set = set;
   occ_set.occlusion = true;
   trace_set(accel, occ_set, threads, run.occ, nullptr, nullptr, opt.stop);
@@ -283,12 +296,20 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
   for (size_t scenario_index = 0; scenario_index < names.size() && !stopped(); ++scenario_index) {
     const std::string& name = names[scenario_index];
     if (opt.on_start) opt.on_start(name, "generating", scenario_index, names.size());
-    const StressScenario sc = make_stress_scenario(name, opt.ray_scale, opt.seed);
+    const StressScenario sc = make_stress_scenario(name, opt.ray_scale, opt.seed, opt.scene);
     TruthCache truth(sc.scene.mesh, sc.rays);
-    auto reference = make_accelerator(opt.reference);
+    MemoryGuard guard(opt.memory_headroom);
+    MemoryStep reference_step = structure_step(opt.reference, sc.scene.mesh, sc.rays.size());
+    reference_step.what = "the reference " + opt.reference;
+    guard.require(reference_step);
+    const size_t before_reference = resident_bytes();
+    std::unique_ptr<Accelerator> reference = make_accelerator(opt.reference);
     reference->build(sc.scene.mesh);
+    const size_t reference_bytes = resident_bytes() > before_reference ? resident_bytes() - before_reference : 0;
     TraceOutput ref_out;
-    trace_set(*reference, RaySet{"stress", false, sc.rays}, threads, ref_out, nullptr, nullptr, opt.stop);
+    const RaySet all{"stress", false, sc.rays};
+    trace_set(*reference, all, threads, ref_out, nullptr, nullptr, opt.stop);
+    ReferenceTiming ref_timing{reference.get(), 0.0, sc.rays.size()};
 
     // Leak test: the exact answer for every ray aimed from outside.
     if (sc.watertight()) {
@@ -305,12 +326,26 @@ std::vector<StressRecord> run_stress(const std::vector<std::string>& accel_specs
       rec.scenario = name;
       rec.accel = spec_text;
       rec.triangles = sc.scene.num_triangles();
+      if (!guard.fits(structure_step(spec_text, sc.scene.mesh, sc.rays.size()))) {
+        if (reference && guard.fits(structure_step(spec_text, sc.scene.mesh, sc.rays.size()), reference_bytes)) {
+          // Fits once the reference's memory is returned: its timing on every
+          // ray now (its answers are kept), then released.
+          ref_timing.full_s = time_trace(*reference, all, threads, 3).median_s;
+          ref_timing.accel = nullptr;
+          reference.reset();
+        } else {
+          if (opt.on_skip)
+            opt.on_skip(StructureSkip{name, spec_text, guard.shortage(), rec.triangles, guard.last_estimate(),
+                                      guard.last_available()});
+          continue;
+        }
+      }
       std::unique_ptr<Accelerator> accel;
       if (!build_for_stress(spec_text, sc.scene.mesh, rec, accel)) {
         emit(rec);
         continue;
       }
-      const StressRun run = trace_for_stress(*accel, *reference, sc.rays, opt, threads, rec);
+      const StressRun run = trace_for_stress(*accel, ref_timing, sc.rays, opt, threads, rec);
       count_disagreements(sc, name, run, ref_out, truth, arena, rec, opt.stop);
       if (stopped()) break;  // interrupted inside the record: its counts are partial, it is not kept
       if (sc.watertight()) count_leaks(sc, run, truth, rec);

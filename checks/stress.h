@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "base/ray.h"
+#include "checks/memory_guard.h"
+#include "checks/structure_skip.h"
 #include "scenes/scene.h"
 
 namespace raylab {
@@ -49,8 +51,12 @@ std::vector<std::string> expand_stress_scenarios(const std::string& list);
 
 // Builds one scenario; `rays` scales the ray count (the default sizes are
 // chosen so that `raylab stress` runs every scenario for every accelerator
-// in a few minutes on 2 cores).
-StressScenario make_stress_scenario(const std::string& name, double ray_scale = 1.0, uint64_t seed = 1);
+// in a few minutes on 2 cores). `scene_spec` (any scene load_scene takes)
+// replaces the Cornell box of the scenarios built on it (rays, far_*, tiny,
+// huge: stress_scenario_takes_scene); the others throw SpecError with it.
+StressScenario make_stress_scenario(const std::string& name, double ray_scale = 1.0, uint64_t seed = 1,
+                                    const std::string& scene_spec = "");
+bool stress_scenario_takes_scene(const std::string& name);
 
 // Closed meshes with shared vertices, for the watertight scenarios.
 TriangleMesh make_closed_box(int n, const Vec3f& center, float half);
@@ -71,6 +77,10 @@ struct StressRecord {
   double max_rel_t_err = 0.0;
   bool watertight_test = false;  // uses the watertight triangle test (leaks fail the run)
   bool counts = true;            // failures count for the exit code (not for embree or tri=mt rows)
+  // The reference was timed on every ray of the scenario and released before
+  // this structure's build (no room for both): its speed on the traced
+  // subset is that rate, not a back-to-back timing.
+  bool reference_timed_first = false;
   size_t leak_rays = 0, leaks = 0;
   double leaks_per_million() const { return leak_rays ? 1e6 * static_cast<double>(leaks) / leak_rays : 0.0; }
 
@@ -89,6 +99,15 @@ struct StressOptions {
   double slow_ratio = 0.05;             // below this ratio to robust Embree a method is reported as slow
   std::string reference = "embree:robust=1";
   bool add_variants = true;             // watertight scenarios: also tri=mt variants and embree robust
+  // The scene of the scenarios built on one (make_stress_scenario); empty = the Cornell box.
+  std::string scene;
+  // Memory (checks/memory_guard.h): a structure that fits only without the
+  // reference gets the reference timed on every ray first and released
+  // (StressRecord::reference_timed_first); one that does not fit at all is
+  // skipped (on_skip); a reference that does not fit throws MemoryShortage
+  // (the records before it were passed to `progress`). 0 = no check.
+  double memory_headroom = kDefaultMemoryHeadroom;
+  std::function<void(const StructureSkip&)> on_skip;
   // Interruption and progress (raylab stress): stop is polled before each
   // scenario x accelerator and inside its traces and oracle calls, per chunk
   // of rays (a record interrupted half-way is dropped); on_start sees it

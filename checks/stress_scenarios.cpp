@@ -49,9 +49,11 @@ const std::vector<ScenarioInfo>& scenario_infos() {
   return infos;
 }
 
+// The scene of a scenario that takes one: the given spec loaded, else the Cornell box.
+Scene base_scene(const std::string& scene_spec) { return scene_spec.empty() ? make_cornell_box() : load_scene(scene_spec); }
+
 // Scale then translate, vertices and view.
-Scene transformed_cornell(float scale, const Vec3f& offset) {
-  Scene s = make_cornell_box();
+Scene transformed(Scene s, float scale, const Vec3f& offset) {
   for (auto& v : s.mesh.vertices) v = v * scale + offset;
   s.view.from = s.view.from * scale + offset;
   s.view.at = s.view.at * scale + offset;
@@ -161,25 +163,6 @@ StressScenario watertight_scenario(const std::string& name, double scale, uint64
   sc.rays = std::move(rays);
   sc.leak_kind = std::move(kinds);
   return sc;
-}
-
-// Needles: long, 1e-4 wide triangles between random points on opposite faces of the unit cube.
-TriangleMesh make_needles(size_t n, Pcg32& rng) {
-  TriangleMesh m;
-  for (size_t i = 0; i < n; ++i) {
-    const int axis = static_cast<int>(i % 3);
-    Vec3f a(rng.uniform(), rng.uniform(), rng.uniform()), b(rng.uniform(), rng.uniform(), rng.uniform());
-    a[axis] = 0.0f;
-    b[axis] = 1.0f;
-    Vec3f w = Vec3f::Zero();
-    w[(axis + 1) % 3] = 1e-4f;
-    const uint32_t base = static_cast<uint32_t>(m.vertices.size());
-    m.vertices.push_back(a);
-    m.vertices.push_back(b);
-    m.vertices.push_back(a + w);
-    m.triangles.push_back({base, base + 1, base + 2});
-  }
-  return m;
 }
 
 // The ray corner cases on a normal scene (the Cornell box).
@@ -458,18 +441,20 @@ StressScenario single_scenario(double scale, uint64_t seed) {
   return sc;
 }
 
-// The Cornell box with ray corner cases (tmin == tmax, huge and tiny directions, ...).
-StressScenario corner_case_scenario(double scale, uint64_t seed) {
+// The Cornell box (or the given scene) with ray corner cases (tmin == tmax, huge and tiny directions, ...).
+StressScenario corner_case_scenario(double scale, uint64_t seed, const std::string& scene_spec) {
   StressScenario sc;
-  sc.scene = make_cornell_box();
+  sc.scene = base_scene(scene_spec);
   const RaySet prim = make_jittered_primary_rays(sc.scene, 4096, seed + 7);
   // Hit distances for the tmin == tmax rays: the plane distance along the
   // view axis is good enough (the oracle judges the answers, not this).
   std::vector<float> t(prim.rays.size(), std::numeric_limits<float>::quiet_NaN());
+  const Vec3f mid = sc.scene.bounds().center();
   for (size_t i = 0; i < t.size(); ++i) {
-    // Distance to the back wall plane z = 559.2 (published Cornell box).
     const Ray& r = prim.rays[i];
-    if (r.dir.z() != 0.0f) t[i] = (559.2f - r.org.z()) / r.dir.z();
+    if (!scene_spec.empty()) t[i] = (mid - r.org).norm() / r.dir.norm();  // to the scene's middle
+    // Distance to the back wall plane z = 559.2 (published Cornell box).
+    else if (r.dir.z() != 0.0f) t[i] = (559.2f - r.org.z()) / r.dir.z();
   }
   sc.rays = corner_case_rays(sc.scene, scaled(65536, scale), seed, prim.rays, t);
   return sc;
@@ -477,25 +462,31 @@ StressScenario corner_case_scenario(double scale, uint64_t seed) {
 
 }  // namespace
 
-StressScenario make_stress_scenario(const std::string& name, double scale, uint64_t seed) {
+bool stress_scenario_takes_scene(const std::string& name) {
+  return name == "rays" || name.rfind("far_", 0) == 0 || name == "tiny" || name == "huge";
+}
+
+StressScenario make_stress_scenario(const std::string& name, double scale, uint64_t seed, const std::string& scene_spec) {
   const auto& names = stress_scenario_names();
   if (std::find(names.begin(), names.end(), name) == names.end())
     throw SpecError(fmt::format("unknown stress scenario '{}'", name));
+  if (!scene_spec.empty() && !stress_scenario_takes_scene(name))
+    throw SpecError(fmt::format("stress scenario '{}' makes its own scene; a scene is taken by rays, far_1e3, far_1e5, "
+                                "far_1e7, tiny and huge",
+                                name));
   StressScenario sc;
   if (name.rfind("watertight_", 0) == 0) {
     sc = watertight_scenario(name, scale, seed);
   } else if (name.rfind("far_", 0) == 0 || name == "tiny" || name == "huge") {
     const float off = name == "far_1e3" ? 1e3f : name == "far_1e5" ? 1e5f : name == "far_1e7" ? 1e7f : 0.0f;
     const float s = name == "tiny" ? 1e-6f : name == "huge" ? 1e6f : 1.0f;
-    sc.scene = transformed_cornell(s, Vec3f::Constant(off));
+    sc.scene = transformed(base_scene(scene_spec), s, Vec3f::Constant(off));
     sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
   } else if (name == "flat") {
     sc = flat_scenario(scale, seed);
   } else if (name == "slivers") {
-    Pcg32 rng(mix64(seed + 3), 0x511E);
-    TriangleMesh m = make_needles(4000, rng);
-    m.append(make_triangle_soup(2000, seed, 1.0f).mesh);
-    sc.scene = scene_from_mesh("slivers", std::move(m));
+    sc.scene = make_needles_scene(4000, 2000, seed, 1e-4f);
+    sc.scene.name = "slivers";
     sc.rays = standard_rays(sc.scene, scaled(65536, scale), seed);
   } else if (name == "duplicates") {
     TriangleMesh m = make_triangle_copies(1000).mesh;
@@ -516,7 +507,7 @@ StressScenario make_stress_scenario(const std::string& name, double scale, uint6
     for (size_t i = 0; i < scaled(16384, scale); ++i)
       sc.rays.push_back(Ray(random_unit(rng) * 10.0f * rng.uniform(), random_unit(rng), 0.0f, (i % 2) ? kInf : 100.0f));
   } else if (name == "rays") {
-    sc = corner_case_scenario(scale, seed);
+    sc = corner_case_scenario(scale, seed, scene_spec);
   }
   if (sc.scene.name.empty()) sc.scene.name = name;
   sc.name = name;

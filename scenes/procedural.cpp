@@ -41,6 +41,13 @@ Scene make_coplanar_scene(size_t n, int grid, int axis, uint64_t seed) {
   return finish_scene(fmt::format("coplanar:n={},grid={},axis={},seed={}", n, grid, axis, seed), std::move(m), frame);
 }
 
+Scene make_needles_scene(size_t n, size_t soup, uint64_t seed, float width) {
+  TriangleMesh m = needles_mesh(n, seed, width);
+  m.append(triangle_soup_mesh(soup, seed, 1.0f));
+  return finish_scene(fmt::format("needles:n={},soup={},seed={},width={}", n, soup, seed, width), std::move(m),
+                      Aabb(Vec3f::Zero(), Vec3f::Ones()));
+}
+
 const std::vector<SceneGenerator>& scene_generators() {
   static const std::vector<SceneGenerator> generators = [] {
   std::vector<SceneGenerator> list = {
@@ -65,6 +72,15 @@ const std::vector<SceneGenerator>& scene_generators() {
        [](const Params& p) {
          return make_coplanar_scene(static_cast<size_t>(p.integer("n")), p.integer("grid"), p.integer("axis"),
                                     static_cast<uint64_t>(p.integer("seed")));
+       }},
+      {"needles", "long thin needles between opposite faces of the unit cube, plus random triangles (stress 'slivers')",
+       {{"n", "4000", "needles", integer_in(0, 5e7)},
+        {"soup", "2000", "random triangles", integer_in(0, 5e7)},
+        seed_param(),
+        {"width", "0.0001", "needle width (the cube is 1 wide)", real_in(0, 1, Ends::OpenLow)}},
+       [](const Params& p) {
+         return make_needles_scene(static_cast<size_t>(p.integer("n")), static_cast<size_t>(p.integer("soup")),
+                                   static_cast<uint64_t>(p.integer("seed")), static_cast<float>(p.real("width")));
        }},
       {"sphere", "closed tessellated UV sphere of radius 1 at the origin",
        {{"segments", "64", "segments around the axis", integer_in(3, kUnbounded)},

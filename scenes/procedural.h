@@ -32,5 +32,7 @@ Scene make_cornell_box();
 Scene make_triangle_soup(size_t n, uint64_t seed, float size = 1.0f);
 Scene make_triangle_copies(size_t n);
 Scene make_coplanar_scene(size_t n, int grid, int axis, uint64_t seed);
+// needles_mesh(n, seed, width) plus a soup of `soup` triangles.
+Scene make_needles_scene(size_t n, size_t soup, uint64_t seed, float width);
 
 }  // namespace raylab

@@ -11,8 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/bench_run.h"
-#include "bench/memory_estimate.h"
-#include "bench/process_memory.h"
+#include "checks/memory_estimate.h"
+#include "checks/process_memory.h"
 #include "scenes/scene_registry.h"
 #include "tests/report_test_util.h"
 #include "tests/test_util.h"

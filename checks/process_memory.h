@@ -1,10 +1,9 @@
 #pragma once
 // Memory as the OS sees it: this process's resident set (now and its peak) and
 // what the machine or the job's cgroup can still give. `raylab bench` records
-// the peak per structure and skips structures whose estimated need does not fit
-// instead of being killed by the kernel's OOM killer half-way.
+// the peak per structure; the memory guard (checks/memory_guard.h) compares
+// each step's estimate with what is available before the step runs.
 #include <cstddef>
-#include <string>
 
 namespace raylab {
 
@@ -23,7 +22,7 @@ bool reset_peak_resident();
 // cgroup v2 memory.max of this process (a Slurm job's allocation, a container).
 size_t available_memory_bytes();
 
-// "31.2 GiB"
-std::string format_gib(double bytes);
+// MemAvailable alone (no cgroup limit); 0 where unavailable.
+size_t mem_available_bytes();
 
 }  // namespace raylab

@@ -1,11 +1,10 @@
-#include "bench/process_memory.h"
+#include "checks/process_memory.h"
 
 #include <algorithm>
 #include <fstream>
 #include <limits>
 #include <sstream>
 
-#include <fmt/format.h>
 
 namespace raylab {
 
@@ -60,8 +59,10 @@ bool reset_peak_resident() {
   return static_cast<bool>(out);
 }
 
+size_t mem_available_bytes() { return proc_kib_field("/proc/meminfo", "MemAvailable"); }
+
 size_t available_memory_bytes() {
-  size_t avail = proc_kib_field("/proc/meminfo", "MemAvailable");
+  size_t avail = mem_available_bytes();
   if (avail == 0) avail = std::numeric_limits<size_t>::max();
   // The limit may sit on any ancestor cgroup (Slurm puts it on the job's, the
   // step is below): the tightest room left along the path counts.
@@ -75,7 +76,5 @@ size_t available_memory_bytes() {
   }
   return avail;
 }
-
-std::string format_gib(double bytes) { return fmt::format("{:.1f} GiB", bytes / (1024.0 * 1024.0 * 1024.0)); }
 
 }  // namespace raylab
