@@ -103,7 +103,8 @@ rule study_bench:
     params: cmd=lambda w, output: study_bench_command(w.scene, output[0])
     threads: NODE_CORES
     resources:
-        mem_mb=lambda w: cell_mem_mb(STUDY_SCENES[w.scene]["spec"]),
+        # Every structure is built in the job: memory for the hungriest one's build.
+        mem_mb=lambda w: cell_mem_mb(STUDY_SCENES[w.scene]["spec"], "every structure"),
         runtime=lambda w: 4 * cell_runtime_min(STUDY_SCENES[w.scene]["spec"]),
         exclusive=1,
     shell: "{params.cmd} > {log} 2>&1"

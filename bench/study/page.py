@@ -54,8 +54,7 @@ def provenance(a):
          f"Embree {m.get('embree')}. Compiler: {m.get('compiler')}; flags: {m.get('flags')}. Binary revision: "
          f"{m.get('revision')}. Run: {m.get('date')}, study preset {a.get('preset')}, `{COMMAND}`")
     if jobs.get("jobs"):
-        t += (f"; the study's {jobs['jobs']} timing and checking jobs took {jobs['wall_s'] / 60:.1f} min wall, "
-              f"{jobs['cpu_s'] / 60:.1f} min CPU")
+        t += f"; the study's {jobs['jobs']} timing and checking jobs took {jobs['wall_s'] / 60:.1f} min"
     return t + f" ({when})."
 
 
