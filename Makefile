@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench bench-full bench-slurm-local docs report microbench clean
+.PHONY: all deps configure build test demo bench bench-full bench-slurm-local study docs report microbench clean
 
 all: build
 
@@ -50,16 +50,34 @@ report: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab
 	./$(BUILD)/raylab report out/bench -o out/report.html
 
-# Regenerates what the README and docs/results.md show, explicitly: runs the quick study,
-# then writes docs/results.md (+ its charts in docs/results_files/), copies the plot.py charts
-# there and the pictures to docs/pictures/, and replaces the README's headline block.
-docs: bench
-	./$(BUILD)/raylab report out/bench -o out/report.html --md docs/results.md
-	mkdir -p docs/results_files docs/pictures
-	cp out/bench/charts/*.png docs/results_files/
-	cp out/bench/heatmaps/*.png out/bench/structures/*.png docs/pictures/
-	sed -i -e 's|(\.\./out/bench/heatmaps/|(pictures/|' -e 's|(\.\./out/bench/structures/|(pictures/|' \
-	       -e 's|(\.\./out/bench/charts/\([^)]*\)\.svg)|(results_files/\1.png)|' docs/results.md
+# The study (workflow/study.smk, the `study:` entry of workflow/config.yaml; docs/results.md):
+# every structure on the scene suite (SPD, interiors, scanned, axis-aligned, slivers, teapot in
+# a stadium, procedural), verify and stress, the time model, verdicts and failure map, written
+# to out/study/<ISA tag>/ and out/study/results.md. A rerun with nothing changed does nothing.
+# STUDY_PRESET=full is the long run (out/study-full/; on Slurm: docs/cluster.md).
+# STUDY_MARCH=x86-64-v3 runs it for another ISA: raylab built in $(BUILD)-x86-64-v3 without
+# -march=native, Embree capped at STUDY_EMBREE_ISA (RAYLAB_EMBREE_ISA, e.g. avx2), written to
+# out/study/x86-64-v3/; the page then shows both.
+STUDY_PRESET ?= quick
+STUDY_MARCH ?=
+STUDY_EMBREE_ISA ?=
+STUDY_BUILD = $(if $(STUDY_MARCH),$(BUILD)-$(STUDY_MARCH),$(BUILD))
+STUDY_TAG = $(if $(STUDY_MARCH),$(STUDY_MARCH),native)
+STUDY_ROOT = $(if $(filter quick,$(STUDY_PRESET)),out/study,out/study-$(STUDY_PRESET))
+
+study: deps
+	cmake -S . -B $(STUDY_BUILD) -DCMAKE_BUILD_TYPE=Release \
+	      $(if $(STUDY_MARCH),-DRAYLAB_NATIVE=OFF -DCMAKE_CXX_FLAGS=-march=$(STUDY_MARCH)) $(CMAKE_FLAGS)
+	cmake --build $(STUDY_BUILD) -j $(JOBS) --target raylab
+	RAYLAB_EMBREE_ISA=$(STUDY_EMBREE_ISA) snakemake -s workflow/Snakefile study --cores $(JOBS) $(SNAKEFLAGS) \
+	    --config raylab=$(STUDY_BUILD)/raylab study_preset=$(STUDY_PRESET) study_tag=$(STUDY_TAG)
+
+# Rewrites docs/results.md (its charts in docs/results_files/study/) and the README's headline
+# block from the study (every ISA run under out/study/), running `make study` first (nothing to
+# do when it is up to date).
+docs: study
+	/usr/bin/python3 -B bench/study/page.py --out docs/results.md --assets docs/results_files/study \
+	    $(STUDY_ROOT)/*/analysis.json
 	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
 
 microbench: configure

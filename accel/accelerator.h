@@ -54,16 +54,29 @@ struct BuildStats {
   std::map<std::string, double> extra;
 };
 
-// Per-ray traversal counters accumulated by the instrumented kernels.
+// Per-ray traversal counters accumulated by the instrumented kernels
+// (HitRecorder, accel/core/hit_recorder.h), one definition for every
+// structure: docs/json-reports.md, "Per-ray counters".
 struct TraversalStats {
   uint64_t rays = 0;
-  uint64_t nodes_visited = 0;   // nodes whose bounds were tested, or grid cells entered (accel/core/hit_recorder.h)
+  uint64_t nodes_visited = 0;   // bounds tested: a BVH's child boxes, a tree's nodes entered, grid cells entered
+  uint64_t steps = 0;           // Havran's traversal steps: inner nodes visited, grid cells entered
+  uint64_t leaves = 0;          // leaves or cells visited whose triangles were tested
+  uint64_t empty_leaves = 0;    // leaves or cells visited that hold no triangle
   uint64_t triangle_tests = 0;
 
+  // Everything but the rays: the work of an inner walk (a hybrid's cell
+  // tree, the entry grid's second walk) added to the ray that made it.
+  void add_walk(const TraversalStats& o) {
+    nodes_visited += o.nodes_visited;
+    steps += o.steps;
+    leaves += o.leaves;
+    empty_leaves += o.empty_leaves;
+    triangle_tests += o.triangle_tests;
+  }
   TraversalStats& operator+=(const TraversalStats& o) {
     rays += o.rays;
-    nodes_visited += o.nodes_visited;
-    triangle_tests += o.triangle_tests;
+    add_walk(o);
     return *this;
   }
 };

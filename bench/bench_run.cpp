@@ -34,6 +34,9 @@ nlohmann::json BenchRecord::to_json() const {
   auto tree_figure_or_null = [this](auto v) { return has_tree ? nlohmann::json(v) : nlohmann::json(nullptr); };
   j["nodes_per_ray"] = number_or_null(nodes_per_ray);
   j["tris_per_ray"] = number_or_null(tris_per_ray);
+  j["steps_per_ray"] = number_or_null(steps_per_ray);
+  j["leaves_per_ray"] = number_or_null(leaves_per_ray);
+  j["empty_leaves_per_ray"] = number_or_null(empty_leaves_per_ray);
   j["sah_cost"] = number_or_null(sah_cost);
   j["nodes"] = tree_figure_or_null(nodes);
   j["leaves"] = tree_figure_or_null(leaves);
@@ -149,10 +152,15 @@ BenchRecord make_record(const std::string& scene, size_t triangles, const Built&
   r.ratio_to_embree = r.embree_mrays_per_s > 0 ? r.mrays_per_s / r.embree_mrays_per_s : 0;
   r.embree_agreement = agree;
   r.nodes_per_ray = r.tris_per_ray = std::numeric_limits<double>::quiet_NaN();
+  r.steps_per_ray = r.leaves_per_ray = r.empty_leaves_per_ray = r.nodes_per_ray;
   // A structure without counters (Embree) leaves them at zero: n/a, not 0.
-  if (ts.rays && (ts.nodes_visited > 0 || ts.triangle_tests > 0)) {
-    r.nodes_per_ray = static_cast<double>(ts.nodes_visited) / ts.rays;
-    r.tris_per_ray = static_cast<double>(ts.triangle_tests) / ts.rays;
+  if (ts.rays && (ts.nodes_visited > 0 || ts.triangle_tests > 0 || ts.leaves > 0)) {
+    const auto per_ray = [&](uint64_t n) { return static_cast<double>(n) / static_cast<double>(ts.rays); };
+    r.nodes_per_ray = per_ray(ts.nodes_visited);
+    r.tris_per_ray = per_ray(ts.triangle_tests);
+    r.steps_per_ray = per_ray(ts.steps);
+    r.leaves_per_ray = per_ray(ts.leaves);
+    r.empty_leaves_per_ray = per_ray(ts.empty_leaves);
   }
   r.sah_cost = b.stats.sah_cost;
   r.nodes = b.stats.nodes;
@@ -350,6 +358,7 @@ std::string bench_csv(const std::vector<BenchRecord>& records) {
                                          "mrays_per_s", "mrays_min",   "mrays_max",      "prepare_ms", "embree_mrays_per_s",
                                          "ratio_to_embree", "best_embree", "ratio_to_best_embree", "embree_agreement",
                                          "trace_passes", "shortest_repeat_s", "nodes_per_ray", "tris_per_ray",
+                                         "steps_per_ray", "leaves_per_ray", "empty_leaves_per_ray",
                                          "sah_cost",    "nodes",       "leaves",         "max_depth",
                                          "rss_before_build_bytes", "rss_peak_bytes"};
   auto quote = [](const std::string& v) {

@@ -76,6 +76,8 @@ struct BenchRecord {
   double best_embree_mrays_per_s = 0, ratio_to_best_embree = 0;
   double embree_agreement = 1.0;  // fraction of rays answered like Embree (ties count as agreement)
   double nodes_per_ray = 0, tris_per_ray = 0;  // NaN: not counted (Embree has no traversal counters)
+  // Havran's counts per ray (accel/core/hit_recorder.h); NaN as above.
+  double steps_per_ray = 0, leaves_per_ray = 0, empty_leaves_per_ray = 0;
   double sah_cost = 0;                          // NaN: not reported by the structure
   size_t nodes = 0, leaves = 0;                 // 0 with has_tree false: not reported (Embree)
   int max_depth = 0;

@@ -21,6 +21,7 @@ packages=(
   libgmp-dev         # exact arithmetic for the edge/vertex oracle
   clang libclang-rt-14-dev  # libFuzzer targets (scripts/fuzz.sh)
   python3-matplotlib # charts (run with /usr/bin/python3)
+  python3-scipy      # the study's time model: non-negative least squares (bench/study/)
   chromium           # headless browser: tests load `raylab report` pages and screenshot them
   assimp-testmodels  # Assimp's sample files in many formats (scripts/render-testmodels.sh)
   snakemake          # the benchmark workflow (make bench, workflow/Snakefile)

@@ -20,6 +20,7 @@ class BruteAccel final : public BatchAccelerator<BruteAccel> {
     // Before build() there are no triangles: every ray misses.
     if (tris_.empty() || !ray_is_valid(ray)) return rec.hit();
     const TrianglePrecompute<kTest> pre(ray);
+    rec.count_leaf(tris_.size());  // one leaf: no steps
     // In id order, strictly nearer only: among exact ties the lowest id wins.
     intersect_leaf(pre, ray, tris_.data(), static_cast<uint32_t>(tris_.size()), rec);
     return rec.hit();

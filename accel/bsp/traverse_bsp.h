@@ -155,7 +155,7 @@ inline Hit traverse_bsp(const BspView& tree, const Ray& ray, TraversalStats* sta
   while (true) {
     BspPackedNode n = tree.nodes[node];
     while (!n.is_leaf()) {
-      rec.count_nodes(1);
+      rec.count_inner();
       const uint32_t code = n.code();
       float rel, margin, inv;
       uint32_t neg;

@@ -57,12 +57,13 @@ template <TriangleTest kTest, typename Node, typename Recorder, typename Enters>
   while (true) {
     const Node& n = nodes[node];
     if (n.count != 0) {
+      rec.count_leaf(n.count);
       if (intersect_leaf(pre, ray, tris + n.index, n.count, rec)) {
         if constexpr (Recorder::kStopAtFirstHit) return rec.hit();
         bound = pad_far(rec.tmax());
       }
     } else {
-      rec.count_nodes(2);
+      rec.count_inner(2);
       float tl, tr;
       const bool hl = enters(nodes[n.index], tmin, bound, tl);
       const bool hr = enters(nodes[n.index + 1], tmin, bound, tr);

@@ -742,7 +742,7 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
   while (true) {
     if (!wide_ref::is_leaf(cur)) {
       const Node& node = bvh.nodes[cur];
-      if constexpr (kCount) rec.count_nodes(count_children<N>(node));
+      if constexpr (kCount) rec.count_inner(count_children<N>(node));
       V tnear;
       uint32_t mask;
       if constexpr (kScalar) {
@@ -773,6 +773,7 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
       br_ready = true;
     }
     const TriangleBlock<W>* blocks = bvh.blocks + wide_ref::leaf_first(cur);
+    rec.count_leaf(wide_ref::leaf_blocks(cur));
     const bool kept = kScalar ? intersect_leaf_scalar<W>(blocks, wide_ref::leaf_blocks(cur), wr, tmin, rec)
                               : intersect_block_leaf<W>(blocks, wide_ref::leaf_blocks(cur), br, tmin, rec);
     if (kept) {

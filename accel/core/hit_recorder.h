@@ -6,14 +6,13 @@
 // counters. Each structure keeps its own walk and asks the recorder, as
 // madmann91/bvh v2 separates its top-down walk from the leaf function.
 //
-// Counting, one definition for every structure (README "Statistics"):
-//  - a ray: every ray handed to a traversal, valid or not;
-//  - a node visited: an inner node or leaf whose bounds the ray is tested
-//    against (a BVH counts each child box it tests, the root's included; a
-//    k-d tree, whose cells are implicit, each node it enters), and for grids
-//    each cell the walk enters (top cells and sub-grid cells alike);
-//  - a triangle test: one ray-triangle test (SIMD blocks count their
-//    distinct triangles).
+// Counting, one definition for every structure, defined once in
+// docs/json-reports.md ("Per-ray counters"): rays; Havran's traversal steps
+// (count_step: an inner node visited or a grid cell entered), leaves and
+// empty leaves visited (count_leaf: a triangle list tested, or none to
+// test); triangle tests (count_triangles); and nodes visited, i.e. bounds
+// tests (count_nodes). A grid cell is all three of a node, a step and a
+// leaf or empty leaf (count_cell).
 #include <algorithm>
 #include <cstdint>
 #include <limits>
@@ -69,6 +68,28 @@ class HitRecorder {
   }
   [[gnu::always_inline]] void count_triangles(uint64_t n) {
     if constexpr (kCount) stats_->triangle_tests += n;
+  }
+  [[gnu::always_inline]] void count_step() {
+    if constexpr (kCount) stats_->steps++;
+  }
+  // An inner node visited whose walk tested `bounds` bounds: nodes and a step.
+  [[gnu::always_inline]] void count_inner(uint64_t bounds = 1) {
+    count_nodes(bounds);
+    count_step();
+  }
+  // A leaf (or cell) visited that holds `triangles` triangles (or blocks):
+  // a leaf when it holds some, an empty leaf otherwise.
+  [[gnu::always_inline]] void count_leaf(uint64_t triangles) {
+    if constexpr (kCount) (triangles ? stats_->leaves : stats_->empty_leaves)++;
+  }
+  // A grid cell entered: a node visited, a step, and a leaf or empty leaf.
+  [[gnu::always_inline]] void count_cell(uint64_t triangles) {
+    count_inner();
+    count_leaf(triangles);
+  }
+  // The work of an inner walk made for this ray (its ray not counted again).
+  [[gnu::always_inline]] void count_walk(const TraversalStats& inner) {
+    if constexpr (kCount) stats_->add_walk(inner);
   }
 
  private:

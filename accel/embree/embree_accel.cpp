@@ -20,8 +20,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -52,6 +54,22 @@ const char* error_name(RTCError e) {
 
 enum class Api { single, packet4, packet8, packet16, stream };
 
+// The environment variable that caps the ISA of every Embree device of the
+// process (Embree's own `max_isa=` device setting), so that a study built
+// for a narrower ISA (docs/results.md, "another instruction set") times
+// Embree on that ISA too. Unset or empty: Embree picks the widest the CPU has.
+constexpr const char* kIsaCapVariable = "RAYLAB_EMBREE_ISA";
+
+// The device configuration string: "max_isa=CAP" or "" (Embree's default).
+std::string device_config() {
+  const char* cap = std::getenv(kIsaCapVariable);
+  if (!cap || !*cap) return "";
+  static const char* const kIsas[] = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+  for (const char* isa : kIsas)
+    if (std::strcmp(cap, isa) == 0) return std::string("max_isa=") + isa;
+  throw EmbreeError(fmt::format("{} must be sse2, sse4.2, avx, avx2 or avx512, got '{}'", kIsaCapVariable, cap));
+}
+
 using namespace embree_adapter;
 
 struct EmbreePrepared final : PreparedRays {
@@ -80,7 +98,7 @@ class EmbreeAccel final : public Accelerator {
  public:
   EmbreeAccel(RTCBuildQuality quality, bool robust, bool compact, Api api, bool coherent)
       : quality_(quality), robust_(robust), compact_(compact), api_(api), coherent_(coherent) {
-    device_ = rtcNewDevice(nullptr);
+    device_ = rtcNewDevice(device_config().c_str());
     if (!device_) throw EmbreeError(fmt::format("embree: cannot create device: {}", error_name(rtcGetDeviceError(nullptr))));
     rtcSetDeviceErrorFunction(device_, &EmbreeAccel::on_error, this);
     rtcSetDeviceMemoryMonitorFunction(device_, &EmbreeAccel::on_memory, this);
@@ -433,7 +451,8 @@ void embree_direct_occluded(const Accelerator& embree, const PreparedRays& prepa
 bool is_embree_spec(const std::string& spec) { return spec == "embree" || spec.rfind("embree:", 0) == 0; }
 
 Description embree_description() {
-  RTCDevice dev = rtcNewDevice(nullptr);
+  const std::string config = device_config();
+  RTCDevice dev = rtcNewDevice(config.c_str());
   if (!dev) return {{"version", "unknown"}, {"isa", "unknown"}};
   const ssize_t version = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION);
   std::string isa = "unknown ISA";
@@ -445,6 +464,18 @@ Description embree_description() {
   if (native16) isa = "AVX512";
   else if (native8) isa = "AVX2";
   else isa = "SSE";
+  // Under a cap narrower than what the CPU offers, the cap is what runs.
+  if (!config.empty()) {
+    static const char* const kByWidth[] = {"SSE2", "SSE4.2", "AVX", "AVX2", "AVX512"};
+    std::string cap = config.substr(config.find('=') + 1);
+    std::transform(cap.begin(), cap.end(), cap.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    const auto rank = [&](const std::string& name) {
+      for (int i = 0; i < 5; ++i)
+        if (name == kByWidth[i]) return i;
+      return name == "SSE" ? 1 : 4;
+    };
+    if (rank(cap) <= rank(isa)) isa = cap;
+  }
   return {{"version", fmt::format("{}.{}.{}", version / 10000, (version / 100) % 100, version % 100)}, {"isa", isa}};
 }
 

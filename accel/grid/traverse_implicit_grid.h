@@ -24,7 +24,6 @@ inline Hit traverse_grid(const ImplicitGridView& v, const Ray& ray, TraversalSta
   return walk_grid<kTest, kAnyHit, kCount, false, kFarFirst>(g.dda, g.empty, ray, stats, [&](const DdaRay& dr, double t0, double t1, auto& q) {
     const int64_t sy = g.dda.stride[1], sz = g.dda.stride[2];
     dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double, double t_exit) {
-      q.rec.count_nodes(1);
       const int64_t z = cell / sz, rem = cell - z * sz, y = rem / sy, x = rem - y * sy;
       const size_t s[3] = {g.slab(0, static_cast<int32_t>(x)), g.slab(1, static_cast<int32_t>(y)),
                            g.slab(2, static_cast<int32_t>(z))};
@@ -33,6 +32,12 @@ inline Hit traverse_grid(const ImplicitGridView& v, const Ray& ray, TraversalSta
       const uint64_t* bx = g.bits.data() + s[0] * g.words;
       const uint64_t* by = g.bits.data() + s[1] * g.words;
       const uint64_t* bz = g.bits.data() + s[2] * g.words;
+      if constexpr (kCount) {
+        // The cell's triangles: those in all three of its slabs.
+        uint64_t in_cell = 0;
+        for (uint32_t w = lo; w < hi; ++w) in_cell += static_cast<uint64_t>(std::popcount(bx[w] & by[w] & bz[w]));
+        q.rec.count_cell(in_cell);
+      }
       for (uint32_t w = lo; w < hi; ++w) {
         uint64_t m = bx[w] & by[w] & bz[w];
         while (m) {

@@ -41,16 +41,17 @@ inline Hit traverse_grid(const SingleLevelGridView<Cells>& g, const Ray& ray, Tr
                                                                                   [&](const DdaRay& dr, double t0,
                                                                                       double t1, auto& q) {
       const auto visit = [&](int64_t cell, double, double t_exit) __attribute__((always_inline)) {
-        q.rec.count_nodes(1);
         uint32_t begin, count;
-        if (!g.cells.find(cell, begin, count)) return false;
+        const bool found = g.cells.find(cell, begin, count);
+        q.rec.count_cell(found ? count : 0);
+        if (!found) return false;
         return q.visit_run(g, begin, count, t_exit);
       };
       if (g.clearance) {
         dda_walk_skipping(g.dda, dr, t0, t1, [&](int64_t cell) { return g.clearance[cell]; },
                           [&](int64_t cell, double t_enter, double t_exit) __attribute__((always_inline)) {
                             if (g.clearance[cell] != 0) {
-                              q.rec.count_nodes(1);
+                              q.rec.count_cell(0);
                               return false;
                             }
                             return visit(cell, t_enter, t_exit);

@@ -55,11 +55,19 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
     // always_inline: GCC otherwise keeps this lambda (the whole per-cell
     // body) out of line, which measured 10 % slower.
     dda_walk(g.top, dr, t0, t1, [&](int64_t top_cell, double t_enter, double t_exit) __attribute__((always_inline)) {
-      rec.count_nodes(1);
       const uint32_t k = g.top_cells[top_cell];
-      if (k == kEmptyTopCell) return false;
+      if (k == kEmptyTopCell) {
+        rec.count_cell(0);
+        return false;
+      }
       const TopCellContent& content = g.contents[k];
-      if (!content.has_subgrid()) return q.visit_run(g, content.large_begin, content.large_count, t_exit);
+      if (!content.has_subgrid()) {
+        rec.count_cell(content.large_count);
+        return q.visit_run(g, content.large_begin, content.large_count, t_exit);
+      }
+      // A top cell with a sub-grid is a step, and a leaf for its large triangles.
+      rec.count_inner();
+      if (content.large_count != 0) rec.count_leaf(content.large_count);
       if (content.large_count != 0 && q.test_run(g, content.large_begin, content.large_count)) return true;
       const DdaGrid sub_dda = content.dda();
       // Closest hit: no farther than the hit so far (any hit: no hit yet).
@@ -68,8 +76,8 @@ inline Hit traverse_two_level_grid(const TwoLevelGridView& g, const Ray& ray, Tr
       if (dda_clip(dr, sub_dda.lo, sub_dda.hi, s0, s1)) {
         const uint32_t* offsets = g.offsets + content.offsets_base;
         const bool stop = dda_walk(sub_dda, dr, s0, s1, [&](int64_t cell, double, double cell_exit) __attribute__((always_inline)) {
-          rec.count_nodes(1);
           const uint32_t begin = offsets[cell], end = offsets[cell + 1];
+          rec.count_cell(end - begin);
           if (begin == end) return false;
           return q.visit_run(g, begin, end - begin, cell_exit);
         });

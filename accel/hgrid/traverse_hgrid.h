@@ -87,6 +87,7 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
   GridRayQuery<kTest, Recorder> q(ray, stats);
   auto test = [&](int level, int64_t cell) {
     const CellSlot* s = g.cells.find(hgrid_key(level, cell));
+    q.rec.count_leaf(s ? s->count : 0);
     return s && q.test_cell(g.refs.data() + s->begin, s->count, g.tris.data());
   };
   while (active > 0) {
@@ -96,7 +97,7 @@ inline Hit traverse_hgrid(const Hgrid& g, const Ray& ray, TraversalStats* stats)
       if (walks[i].t_enter < walks[best].t_enter) best = i;
     HgridWalk& w = walks[best];
     if (q.rec.found() && line.t_base + w.t_enter > static_cast<double>(q.rec.hit().t)) break;  // no closer hit can follow
-    q.rec.count_nodes(1);
+    q.rec.count_inner();
     if (g.neighbours == HgridNeighbours::Store) {
       if (test(w.level, w.index)) break;  // any hit: found
     } else {

@@ -60,10 +60,7 @@ inline Hit traverse_entry_grid(const EntryGridView& g, const Ray& ray, Traversal
       if (!(rest.tmin <= rest.tmax)) return first;
       TraversalStats rest_stats;
       const Hit second = traverse_kdtree<kTest, kAnyHit, kCount>(g.root, rest, kCount ? &rest_stats : nullptr);
-      if constexpr (kCount) {
-        stats->nodes_visited += rest_stats.nodes_visited;
-        stats->triangle_tests += rest_stats.triangle_tests;
-      }
+      if constexpr (kCount) stats->add_walk(rest_stats);
       if (second.valid() && (!first.valid() || second.t < first.t)) return second;
       return first;
     }

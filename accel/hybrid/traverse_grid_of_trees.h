@@ -55,10 +55,14 @@ inline Hit traverse_grid_of_trees(const GridOfTreesView<View>& g, const Ray& ray
   const double pad_base = kCellIntervalPad * min_cell / dir_max;
   TraversalStats inner_stats;
   dda_walk(g.dda, dr, t0, t1, [&](int64_t cell, double s_enter, double s_exit) {
-    rec.count_nodes(1);
     const double t_enter = t_base + s_enter, t_exit = t_base + s_exit;
     const uint32_t tree = g.cell_tree[cell];
-    if (tree == kNoCellTree) return false;
+    if (tree == kNoCellTree) {
+      rec.count_cell(0);
+      return false;
+    }
+    // A cell with a tree is a step; its tree's walk counts its own.
+    rec.count_inner();
     // Pad also by a relative amount of t: float rounding of large t.
     const double pad = pad_base + 1e-6 * std::max(std::fabs(t_enter), std::fabs(t_exit));
     Ray sub = ray;
@@ -75,8 +79,7 @@ inline Hit traverse_grid_of_trees(const GridOfTreesView<View>& g, const Ray& ray
     }
     return rec.found() && static_cast<double>(rec.hit().t) <= t_exit;
   });
-  rec.count_nodes(inner_stats.nodes_visited);
-  rec.count_triangles(inner_stats.triangle_tests);
+  rec.count_walk(inner_stats);
   return rec.hit();
 }
 

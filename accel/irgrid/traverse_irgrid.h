@@ -83,7 +83,7 @@ inline Hit traverse_irgrid(const Irgrid& g, const Ray& ray, TraversalStats* stat
     while (true) {
       // With blocks, `cur` is the cell's slab position (irgrid.h).
       const IrgridCell& c = kBlocks ? g.slab_cell(cur) : cells[cur];
-      q.rec.count_nodes(1);
+      q.rec.count_cell(c.count);
       double t_face[3];
       for (int a = 0; a < 3; ++a)
         t_face[a] = std::fma(static_cast<double>(face_hi[a] ? c.hi[a] : c.lo[a]), exit_scale[a], exit_base[a]);

@@ -133,6 +133,7 @@ template <bool kBlocks, class Tree, class LeafRay, class Recorder>
 [[gnu::always_inline]] inline bool intersect_kd_leaf(const Tree& tree, uint32_t first, uint32_t count,
                                                      const LeafRay& pre, const Ray& ray, Recorder& rec) {
   rec.count_nodes(1);
+  rec.count_leaf(count);
   if constexpr (kBlocks)
     return intersect_block_leaf<kKdBlockWidth>(tree.blocks + first, kd_leaf_blocks(count), pre, ray.tmin, rec);
   else
@@ -163,7 +164,7 @@ inline Hit traverse_kdtree(const KdTreeView& tree, const Ray& ray, TraversalStat
   while (true) {
     KdNode n = tree.nodes[node];
     while (!n.is_leaf()) {
-      rec.count_nodes(1);
+      rec.count_inner();
       const int k = n.axis();
       const float rel = n.split() - org[k];
       // Where the ray leaves the (inflated) near child and enters the far one.

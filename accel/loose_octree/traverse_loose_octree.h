@@ -57,6 +57,8 @@ inline Hit traverse_loose_octree(const LooseOctreeView& tree, const Ray& ray, Tr
   Entry cur{0, {0, 0, 0}, 0, t_enter};
   while (true) {
     const OctreeNode& n = tree.nodes[cur.node];
+    if (n.mask()) rec.count_step();
+    if (n.count() || !n.mask()) rec.count_leaf(n.count());
     if (const uint32_t count = n.count()) {
       bool kept;
       if constexpr (kBlocks)

@@ -248,6 +248,8 @@ inline Hit traverse_octree(const OctreeView<Layout>& tree, const Ray& ray, Trave
     rec.count_nodes(1);
     const OctNodeRec node = tree.layout.node(cur.handle, cur.level);
     const uint32_t count = node.meta >> 8;
+    if (node.meta & 0xffu) rec.count_step();
+    if (count || !(node.meta & 0xffu)) rec.count_leaf(count);
     if (count) {
       bool kept;
       if constexpr (kBlocks)

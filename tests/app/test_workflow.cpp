@@ -133,6 +133,24 @@ TEST(Workflow, MergeRejectsAForeignReport) {
   fs::remove_all(dir);
 }
 
+// The output files of a dry run's plan (`snakemake -n`), each checked to lie under `dir`:
+// the workflow writes nothing outside its output directory, so the checkout stays clean.
+size_t outputs_under(const std::string& plan, const fs::path& dir) {
+  std::istringstream lines(plan);
+  size_t outputs = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const auto at = line.find("output: ");
+    if (at == std::string::npos) continue;
+    std::istringstream files(line.substr(at + 8));
+    for (std::string f; std::getline(files, f, ',');) {
+      f.erase(0, f.find_first_not_of(' '));
+      ++outputs;
+      EXPECT_EQ(f.rfind(dir.string(), 0), 0u) << "written outside " << dir << ": " << f;
+    }
+  }
+  return outputs;
+}
+
 // The Snakefile parses and plans the quick preset: every cell of the matrix is a job
 // (without the optional ../shared meshes, so the count does not depend on them).
 TEST(Workflow, SnakefilePlansTheQuickPreset) {
@@ -150,19 +168,7 @@ TEST(Workflow, SnakefilePlansTheQuickPreset) {
     EXPECT_THAT(r.output, HasSubstr(rule)) << rule;
   // ...and every file the workflow writes is under its output directory: `make bench`
   // leaves the checkout clean.
-  std::istringstream lines(r.output);
-  size_t outputs = 0;
-  for (std::string line; std::getline(lines, line);) {
-    const auto at = line.find("output: ");
-    if (at == std::string::npos) continue;
-    std::istringstream files(line.substr(at + 8));
-    for (std::string f; std::getline(files, f, ',');) {
-      f.erase(0, f.find_first_not_of(' '));
-      ++outputs;
-      EXPECT_EQ(f.rfind(dir.string(), 0), 0u) << "written outside out/: " << f;
-    }
-  }
-  EXPECT_GT(outputs, 50u);
+  EXPECT_GT(outputs_under(r.output, dir), 50u);
   fs::remove_all(dir);
 }
 
@@ -184,6 +190,30 @@ TEST(Workflow, SnakefilePlansTheScalarAndFullPresets) {
       EXPECT_THAT(r.output, HasSubstr("--accel 'kdtree:simd=0,ct=15'"));
     }
   }
+  fs::remove_all(dir);
+}
+
+// The study (workflow/study.smk) plans one timing job per scene of the suite (the procedural
+// ones always, the ../shared ones when present), verify, stress, the analysis and the page,
+// all under its output directory; the timing jobs run every structure and variant.
+TEST(Workflow, SnakefilePlansTheStudy) {
+  ASSERT_EQ(sh("command -v snakemake").exit_code, 0) << "snakemake not installed (bash scripts/install-deps.sh)";
+  const auto dir = test::temp_dir("workflow_study");
+  const Shell r = sh("cd " + kSource + " && snakemake -s workflow/Snakefile study -n -p --nolock --cores 2 --config raylab=" +
+                     std::string(RAYLAB_BINARY) + " study_root=" + dir.string() + " node_cores=2 > " +
+                     (dir / "plan.txt").string() + " 2>&1; rc=$?; tr -s ' ' < " + (dir / "plan.txt").string() +
+                     "; exit $rc");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const int scenes = test::have_shared_scenes() ? 23 : 4;
+  EXPECT_THAT(r.output, HasSubstr("study_bench " + std::to_string(scenes) + " "));
+  for (const char* rule : {"study_merge 1 ", "study_stress 1 ", "study_analysis 1 ", "study_page 1 ", "study_suite 1 "})
+    EXPECT_THAT(r.output, HasSubstr(rule)) << rule;
+  for (const char* scene : {"--scene 'stadium'", "--scene 'terrain'", "--scene 'city'", "--scene 'grass'"})
+    EXPECT_THAT(r.output, HasSubstr(scene)) << scene;
+  EXPECT_THAT(r.output, HasSubstr("--accel 'embree,bvh,kdtree,bsp,octree,loose_octree,grid,hashgrid,grid2,hgrid,irgrid,"
+                                  "hybrid,embree:robust=1,bvh:tri=mt' --threads 1"));
+  if (!test::have_shared_scenes()) EXPECT_THAT(r.output, HasSubstr("study: scene balls skipped"));
+  EXPECT_GT(outputs_under(r.output, dir), 8u);
   fs::remove_all(dir);
 }
 

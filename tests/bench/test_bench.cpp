@@ -56,6 +56,27 @@ fs::path* TinyBench::dir_ = nullptr;
 int TinyBench::exit_code_ = -1;
 std::string* TinyBench::output_ = nullptr;
 
+// RAYLAB_EMBREE_ISA caps Embree (its max_isa= setting) and the header names the capped ISA;
+// an unknown name is a one-line error and exit 2, before anything is written.
+TEST(BenchEmbreeIsa, TheCapIsNamedAndUnknownNamesAreRefused) {
+  const auto dir = test::temp_dir("bench_embree_isa");
+  const std::string args = std::string(RAYLAB_BINARY) +
+                           " bench --scene soup:n=300 --accel embree,bvh --ray-sets primary --size 16x16 --repeats 1 "
+                           "--threads 1 --quiet --json ";
+  const auto capped = test::run_shell("RAYLAB_EMBREE_ISA=sse2 " + args + (dir / "sse2.json").string() + " 2>&1");
+  ASSERT_EQ(capped.exit_code, 0) << capped.output;
+  const auto j = read_json(dir / "sse2.json");
+  EXPECT_EQ(j["embree_isa"], "SSE2");
+  EXPECT_THAT(j["embree"].get<std::string>(), ::testing::HasSubstr("SSE2"));
+  ASSERT_EQ(j["records"].size(), 2u);
+  EXPECT_EQ(j["records"][1]["embree_agreement"], 1.0);
+  const auto bad = test::run_shell("RAYLAB_EMBREE_ISA=avx3 " + args + (dir / "bad.json").string() + " 2>&1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.output, ::testing::HasSubstr("RAYLAB_EMBREE_ISA must be sse2, sse4.2, avx, avx2 or avx512, got 'avx3'"));
+  EXPECT_FALSE(fs::exists(dir / "bad.json"));
+  fs::remove_all(dir);
+}
+
 TEST_F(TinyBench, HeaderAndRecordsHaveTheSchema) {
   ASSERT_EQ(exit_code_, 0) << *output_;
   const auto j = read_json(*dir_ / "tiny.json");
@@ -79,7 +100,8 @@ TEST_F(TinyBench, HeaderAndRecordsHaveTheSchema) {
       EXPECT_TRUE(rec.at(key).is_number()) << key;
     // Figures that do not apply are null: Embree has no traversal counters
     // and reports no tree shape.
-    for (const char* key : {"nodes", "leaves", "max_depth", "nodes_per_ray", "tris_per_ray"}) {
+    for (const char* key : {"nodes", "leaves", "max_depth", "nodes_per_ray", "tris_per_ray", "steps_per_ray",
+                            "leaves_per_ray", "empty_leaves_per_ray"}) {
       if (rec["accel"] == "embree") EXPECT_TRUE(rec.at(key).is_null()) << key << " " << rec.dump();
       else EXPECT_TRUE(rec.at(key).is_number()) << key << " " << rec.dump();
     }
