@@ -27,10 +27,7 @@
 #include "accel/bvh/bvh_accel.h"
 #include "accel/bvh/bvh_wide_node.h"
 #include "accel/bvh/collapse_wide.h"
-#include "accel/bvh/occlusion_order.h"
 #include "accel/bvh/optimize_reinsertion.h"
-#include "accel/bvh/presplit.h"
-#include "accel/bvh/quantized_node.h"
 #include "accel/bvh/sah_binning.h"
 #include "accel/bvh/small_sweep.h"
 #include "accel/bvh/sort_network.h"
@@ -123,15 +120,11 @@ std::vector<std::string> family_specs() {
     for (const char* l : {"bvh2", "bvh4", "bvh8"}) specs.push_back(fmt::format("bvh:builder={},layout={}", b, l));
   for (const char* extra :
        {"bvh:opt=reinsert,layout=bvh2", "bvh:opt=reinsert,layout=bvh8", "bvh:opt=reinsert,builder=sbvh,layout=bvh4",
-        "bvh:block=4,leaf=4,bleaf=1", "bvh:block=8,leaf=8", "bvh:block=16,leaf=48", "bvh:layout=bvh4,block=16",
-        "bvh:builder=sbvh,alpha=0,sbudget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8",
-        "bvh:builder=sbvh,alpha=0,sflat=0", "bvh:layout=bvh2,leaf=1",
-        "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
+        "bvh:leaf=8", "bvh:leaf=48", "bvh:leaf=4,opt=reinsert", "bvh:builder=sbvh,sbudget=2",
+        "bvh:builder=sbvh,smin=64", "bvh:layout=bvh2,leaf=1", "bvh:ct=4,ci=0.5", "bvh:bins=4",
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
         "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0",
-        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert", "bvh:presplit=0.5",
-        "bvh:presplit=2,layout=bvh16,opt=reinsert", "bvh:presplit=0.3,layout=bvh2,opt=none",
-        "bvh:big=0.05,bigroot=0.02,bigmin=32", "bvh:big=0.2,bigmin=16,layout=bvh8,opt=reinsert"})
+        "bvh:preset=fast", "bvh:preset=quality", "bvh:preset=sbvh", "bvh:preset=sbvh,layout=bvh16"})
     specs.push_back(extra);
   return specs;
 }
@@ -244,23 +237,20 @@ TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
 }
 
 TEST(BvhFamily, RejectsBadParameters) {
-  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt,simd=0",
-                           "bvh:tri=mt,packet=16",
-                           "bvh:bins=1", "bvh:alpha=-1", "bvh:sbudget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
-                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
-                           "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
-                           "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
-                           "bvh:layout=bvh16,packet=16,block=4", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
-                           "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0", "bvh:owalk=1,block=4"})
+  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:builder=octree", "bvh:layout=bvh3",
+                           "bvh:tri=mt,simd=0", "bvh:tri=mt,packet=16", "bvh:bins=1", "bvh:sbudget=9", "bvh:ct=0",
+                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:leaf=121", "bvh:smin=-2", "bvh:nodes=3",
+                           "bvh:layout=bvh32", "bvh:preset=best", "bvh:preset=", "bvh:bound=sphere,layout=bvh8"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt"));
-  EXPECT_NO_THROW(make_accelerator("bvh:tri=mt,layout=bvh4,block=4"));
+  EXPECT_NO_THROW(make_accelerator("bvh:tri=mt,layout=bvh4"));
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
-  EXPECT_NO_THROW(make_accelerator("bvh:owalk=0,layout=bvh4"));
+  EXPECT_NO_THROW(make_accelerator("bvh:leaf=120"));
+  EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,leaf=255"));
 }
 
-// tri=mt (the study option measuring what watertightness costs) tests the
+// tri=mt (the non-watertight option, measuring what watertightness costs) tests the
 // wide layouts' blocks with the vectorised Moller-Trumbore test, which
 // computes what the scalar intersect_moller_trumbore computes lane by lane
 // (its pre-division range test is conservative): the same closest hits as
@@ -279,7 +269,7 @@ TEST(BvhFamily, MollerTrumboreBlocksMatchBruteForceWithTheSameTest) {
     }
     auto brute = make_accelerator("brute:tri=mt");
     brute->build(s.mesh);
-    for (const char* spec : {"bvh:tri=mt", "bvh:tri=mt,layout=bvh4,block=4", "bvh:tri=mt,block=16",
+    for (const char* spec : {"bvh:tri=mt", "bvh:tri=mt,layout=bvh4", "bvh:tri=mt,layout=bvh16",
                              "bvh:tri=mt,opt=reinsert"}) {
       auto accel = make_accelerator(spec);
       accel->build(s.mesh);
@@ -318,7 +308,7 @@ TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
   }
   for (size_t i = 3; i < rays.size(); i += 37) rays[i].dir.y() = 0.0f;  // axis-parallel component
   for (size_t i = 7; i < rays.size(); i += 41) rays[i].tmin = -1.0f;     // tmin < 0
-  for (const char* layout : {"bvh8", "bvh4"}) {
+  for (const char* layout : {"bvh8", "bvh4", "bvh16"}) {
     auto simd = make_accelerator(fmt::format("bvh:layout={}", layout));
     auto scalar = make_accelerator(fmt::format("bvh:layout={},simd=0", layout));
     simd->build(s.mesh);
@@ -342,7 +332,6 @@ TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
     EXPECT_EQ(soa.nodes_visited, sob.nodes_visited) << layout;
     EXPECT_EQ(soa.triangle_tests, sob.triangle_tests) << layout;
   }
-  EXPECT_THROW(make_accelerator("bvh:simd=0,block=4"), SpecError);
   EXPECT_THROW(make_accelerator("bvh:simd=0,packet=16"), SpecError);
 }
 
@@ -800,10 +789,11 @@ TEST(BvhCollapse, ThickLeavesAreNotFormed) {
   EXPECT_LE(on.dp_cost, off.dp_cost * 1.05);
 }
 
-// The accelerator's default sets the limit on 16-wide trees after the light
-// pass only (thick=auto): counted on the leaf boxes of its outline, the
+// The accelerator sets the limit on 16-wide trees after the light pass only
+// (BvhConfig::thick_limit): counted on the leaf boxes of its outline, the
 // corner's large triangles being axis-planar, so that a large thick leaf box
-// holds more than one of them.
+// holds more than one of them. The trees without the limit have such leaves,
+// the one with it none.
 TEST(BvhCollapse, ThickLeafLimitByDefaultOnSixteenWideLightPassTrees) {
   const TriangleMesh m = room_corner_beside_a_cloud();
   const auto thick_leaves = [&](const std::string& spec) {
@@ -819,10 +809,6 @@ TEST(BvhCollapse, ThickLeafLimitByDefaultOnSixteenWideLightPassTrees) {
     return thick;
   };
   EXPECT_EQ(thick_leaves("bvh:layout=bvh16"), 0);
-  // (Binary leaves are not opened: opt=none's 4-triangle ones may mix planes.)
-  EXPECT_EQ(thick_leaves("bvh:layout=bvh16,opt=none,bleaf=1"), 0);
-  EXPECT_EQ(thick_leaves("bvh:layout=bvh8,thick=0.4"), 0);
-  EXPECT_GE(thick_leaves("bvh:layout=bvh16,thick=0"), 1);
   EXPECT_GE(thick_leaves("bvh:layout=bvh8"), 1);
   EXPECT_GE(thick_leaves("bvh:layout=bvh16,opt=reinsert"), 1);
 }
@@ -864,137 +850,10 @@ TEST(BvhCollapse, WideLayoutNodesAndBlocks) {
   for (int c : seen) EXPECT_EQ(c, 1);
 }
 
-// node=q8: for child boxes at every scale and distance from the origin, the
-// compressed node decodes (with the traversal's own arithmetic, one fused
-// multiply-add in float) to exactly the planes the builder computed in
-// double, those planes contain the float box, and they are the tightest
-// grid planes that do (less than one cell away). Unused slots keep the empty
-// reference and decode to inverted intervals.
-TEST(BvhQuantizedNode, DecodesExactlyToTheTightestContainingGridBox) {
-  Pcg32 rng(20261127, 3);
-  const float offsets[] = {0.0f, 1e-30f, 1e-3f, 1.0f, -7.5f, 1e3f, 3e5f, -1e7f, 1e20f, -1e30f};
-  const float sizes[] = {0.0f, 1e-7f, 1e-3f, 1.0f, 1e4f, 1e9f};
-  size_t checked = 0;
-  for (int trial = 0; trial < 3001; ++trial) {
-    WideNode<8> node;
-    const uint32_t used = trial == 3000 ? 3u : trial % 97 == 0 ? 0u : 1u + rng.next() % 255u;
-    const float off = offsets[trial % 10];
-    for (int c = 0; c < 8; ++c) {
-      for (int a = 0; a < 3; ++a) {
-        node.bounds[2 * a][c] = std::numeric_limits<float>::infinity();
-        node.bounds[2 * a + 1][c] = -std::numeric_limits<float>::infinity();
-      }
-      node.child[c] = wide_ref::kEmpty;
-      if (!(used >> c & 1)) continue;
-      node.child[c] = static_cast<uint32_t>(c + 1);
-      for (int a = 0; a < 3; ++a) {
-        // A child's size and place: mixed scales inside one node, so small children sit next to big ones.
-        const float size = sizes[rng.next() % 6] * rng.uniform();
-        const float lo = off + (std::fabs(off) + 1.0f) * (rng.uniform() - 0.5f) * (c == 0 ? 1e-6f : 1.0f);
-        node.bounds[2 * a][c] = lo;
-        node.bounds[2 * a + 1][c] = lo + size;
-      }
-    }
-    if (trial == 3000) {
-      // Planes just off a grid point far below the origin's magnitude:
-      // lo - origin and hi - origin round in double to the grid point, so
-      // the first quotients are one cell off and the builder must step.
-      for (int a = 0; a < 3; ++a) {
-        node.bounds[2 * a][0] = -1.0f, node.bounds[2 * a + 1][0] = -0.5f;
-        node.bounds[2 * a][1] = -1e-30f, node.bounds[2 * a + 1][1] = 1e-30f;
-      }
-    }
-    const QuantNode8 q = quantize_node(node);
-    for (int a = 0; a < 3; ++a) {
-      ASSERT_GE(q.cell_exp[a], 1);
-      ASSERT_LE(q.cell_exp[a], 254);
-    }
-    for (int c = 0; c < 8; ++c) {
-      ASSERT_EQ(q.child[c], node.child[c]);
-      for (int a = 0; a < 3; ++a) {
-        const float cell = q.cell(a);
-        const double exact_lo = static_cast<double>(q.origin[a]) + q.q[2 * a][c] * static_cast<double>(cell);
-        const double exact_hi = static_cast<double>(q.origin[a]) + q.q[2 * a + 1][c] * static_cast<double>(cell);
-        if (!(used >> c & 1)) {
-          EXPECT_EQ(q.q[2 * a][c], 255);
-          EXPECT_EQ(q.q[2 * a + 1][c], 0);
-          continue;
-        }
-        const float dec_lo = std::fma(static_cast<float>(q.q[2 * a][c]), cell, q.origin[a]);
-        const float dec_hi = std::fma(static_cast<float>(q.q[2 * a + 1][c]), cell, q.origin[a]);
-        ASSERT_EQ(static_cast<double>(dec_lo), exact_lo) << "decoding rounds: trial " << trial;
-        ASSERT_EQ(static_cast<double>(dec_hi), exact_hi) << "decoding rounds: trial " << trial;
-        ASSERT_EQ(dec_lo, q.plane(2 * a, c));
-        ASSERT_EQ(dec_hi, q.plane(2 * a + 1, c));
-        const float lo = node.bounds[2 * a][c], hi = node.bounds[2 * a + 1][c];
-        ASSERT_LE(dec_lo, lo) << "trial " << trial << " child " << c << " axis " << a;
-        ASSERT_GE(dec_hi, hi) << "trial " << trial << " child " << c << " axis " << a;
-        // The next grid planes inward (exact in double) no longer contain the box.
-        EXPECT_GT(exact_lo + cell, static_cast<double>(lo)) << "not the tightest lower plane";
-        EXPECT_LT(exact_hi - cell, static_cast<double>(hi)) << "not the tightest upper plane";
-        ++checked;
-      }
-      EXPECT_EQ(q.child_box(c).is_empty(), !(used >> c & 1));
-    }
-  }
-  EXPECT_GT(checked, 30000u);
-  WideNode<8> bad;
-  for (int c = 0; c < 8; ++c) {
-    for (int a = 0; a < 6; ++a) bad.bounds[a][c] = 0.0f;
-    bad.child[c] = static_cast<uint32_t>(c);
-  }
-  bad.bounds[1][3] = std::numeric_limits<float>::infinity();
-  EXPECT_THROW(quantize_node(bad), std::domain_error);
-}
-
-// node=q8 changes the boxes, not the answers: the same closest hits (prim,
-// t, u, v bit for bit) and occlusion as the float nodes, on scenes with
-// children of very different sizes in one node and far from the origin,
-// and at least as many child boxes entered (the decoded boxes contain the
-// float ones).
-TEST(BvhQuantizedNode, SameAnswersAsFloatNodes) {
-  std::vector<std::pair<std::string, TriangleMesh>> meshes;
-  meshes.emplace_back("soup", test::soup(3000, 5).mesh);
-  meshes.emplace_back("stadium", test::teapot_in_stadium_mesh());
-  TriangleMesh far = test::soup(2000, 9, 2.0f).mesh;
-  for (Vec3f& v : far.vertices) v += Vec3f(3e5f, -2e5f, 1e5f);
-  meshes.emplace_back("far", std::move(far));
-  for (const auto& [name, mesh] : meshes) {
-    std::vector<Ray> rays = test::segment_rays(mesh, 3000, 17);
-    const std::vector<Ray> cam = test::camera_rays(mesh, 48, 48);
-    rays.insert(rays.end(), cam.begin(), cam.end());
-    auto f = make_accelerator("bvh:layout=bvh8");  // the tree node=q8 compresses
-    auto q = make_accelerator("bvh:node=q8");
-    const BuildStats fs = f->build(mesh);
-    const BuildStats qs = q->build(mesh);
-    ASSERT_TRUE(qs.extra.count("q8_area_ratio"));
-    EXPECT_GE(qs.extra.at("q8_area_ratio"), 1.0);
-    std::vector<Hit> hf(rays.size()), hq(rays.size());
-    std::vector<uint8_t> of(rays.size()), oq(rays.size());
-    TraversalStats sf, sq;
-    f->intersect(rays, hf, &sf);
-    q->intersect(rays, hq, &sq);
-    f->occluded(rays, of);
-    q->occluded(rays, oq);
-    size_t hits = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-      ASSERT_EQ(hf[i].prim, hq[i].prim) << name << " ray " << i;
-      ASSERT_EQ(std::memcmp(&hf[i].t, &hq[i].t, sizeof(float)), 0) << name << " ray " << i;
-      ASSERT_EQ(hf[i].u, hq[i].u);
-      ASSERT_EQ(hf[i].v, hq[i].v);
-      ASSERT_EQ(of[i], oq[i]) << name << " ray " << i;
-      hits += hf[i].valid();
-    }
-    EXPECT_GT(hits, rays.size() / 10) << name;
-    EXPECT_GE(sq.nodes_visited, sf.nodes_visited) << name;
-    EXPECT_LT(qs.bytes, fs.bytes) << name << ": compressed nodes take less memory";
-  }
-}
-
 // Triangles that coincide (the same three vertices, as in real meshes with
 // doubled faces) have one centroid, so no object split separates them; a
 // spatial split cannot either (every plane puts all of them on both sides).
-// With single-triangle leaves (bleaf=1) such a node must still end in a
+// With single-triangle binary leaves such a node must still end in a
 // median split, not in spatial splits that copy every reference into both
 // children until the duplication budget is spent (it was: 1.5 references per
 // triangle, twice the memory, on sponza and dragon_in_sponza).
@@ -1061,112 +920,6 @@ TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
 }
 
-// sflat=0 (SbvhOptions::split_planar = false): spatial splits never cut an
-// axis-planar triangle (a floor under long thin triangles), still cut the
-// others, and the references still cover every triangle.
-TEST(BvhSbvh, AxisPlanarTrianglesStayWholeWithoutSplitPlanar) {
-  // Small triangles filling the unit cube, a few long ones across it, and a
-  // floor through its middle (y = 0.5).
-  test::NamedMesh s = test::soup(400, 47, 0.05f);
-  s.mesh.append(test::soup(40, 5, 3.0f).mesh);
-  TriangleMesh floor;
-  floor.vertices = {Vec3f(-0.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, 1.1f),
-                    Vec3f(-0.1f, 0.5f, 1.1f)};
-  floor.triangles = {{0, 1, 2}, {0, 2, 3}};
-  const uint32_t first_floor = static_cast<uint32_t>(s.mesh.num_triangles());
-  s.mesh.append(floor);
-  const Prims p = prims_of(s.mesh);
-  auto references_of_floor = [&](const BinaryBvh& t) {
-    size_t refs = 0;
-    for (uint32_t id : t.prim_ids) refs += id >= first_floor;
-    return refs;
-  };
-  for (bool split_planar : {true, false}) {
-    SCOPED_TRACE(split_planar ? "split_planar" : "whole");
-    SbvhOptions so;
-    so.alpha = 0.0f;
-    so.split_budget = 1.0f;
-    so.spatial_bins = 16;
-    so.split_planar = split_planar;
-    SbvhStats st;
-    const BinaryBvh t = build_sbvh(p.boxes, p.centroids, TriangleSplitter(s.mesh), so, &st);
-    check_binary_tree(t, s.mesh, true);
-    EXPECT_GT(st.spatial_splits, 5u) << "the long triangles are still cut";
-    if (split_planar) EXPECT_GT(references_of_floor(t), 2u) << "the floor spans the scene: cut by the first splits";
-    else EXPECT_EQ(references_of_floor(t), 2u);
-    std::map<uint32_t, std::vector<Aabb>> boxes_of;
-    for (const Bvh2Node& n : t.nodes)
-      if (is_leaf(n))
-        for (uint32_t k = n.index; k < n.index + n.count; ++k) boxes_of[t.prim_ids[k]].push_back(n.bounds());
-    EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
-  }
-  // Through the spec: the same hits as without spatial splits (checked by
-  // the family's brute-force test); here, that the option reaches the builder.
-  const auto with = make_accelerator("bvh:builder=sbvh,alpha=0,sbudget=1");
-  const auto without = make_accelerator("bvh:builder=sbvh,alpha=0,sbudget=1,sflat=0");
-  const BuildStats sw = with->build(s.mesh), so = without->build(s.mesh);
-  EXPECT_GT(sw.extra.at("refs_per_triangle"), so.extra.at("refs_per_triangle"));
-}
-
-// Pre-splitting (presplit.h): the pieces of each triangle lie inside its box
-// and cover it, the budget bounds the references, the long triangles are the
-// ones cut, and the result does not depend on the thread count.
-TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
-  // Long thin triangles across a box (they are what pre-splitting is for),
-  // with a few small ones and a degenerate one.
-  test::NamedMesh s = test::soup(300, 47, 3.0f);
-  TriangleMesh extra;
-  extra.vertices = {Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f),
-                    Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.51f, 0.5f, 0.5f), Vec3f(0.5f, 0.51f, 0.5f)};
-  extra.triangles = {{0, 1, 2}, {3, 4, 5}};
-  s.mesh.append(extra);
-  const size_t n = s.mesh.num_triangles();
-  PresplitOptions po;
-  po.budget = 0.5f;
-  PresplitStats st;
-  const std::vector<BuildRef> refs = presplit_references(s.mesh, po, &st);
-  EXPECT_GT(refs.size(), n + n / 4) << "most of the budget is spent on a scene of long triangles";
-  EXPECT_LE(refs.size(), n + static_cast<size_t>(0.5 * n)) << "split budget";
-  EXPECT_GT(st.triangles_split, 20u);
-  std::map<uint32_t, std::vector<Aabb>> boxes_of;
-  for (const BuildRef& r : refs) {
-    const Aabb b = r.box.aabb();
-    ASSERT_LT(r.prim(), n);
-    ASSERT_FALSE(b.is_empty());
-    EXPECT_TRUE(s.mesh.triangle_bounds(r.prim()).contains(b)) << "piece of triangle " << r.prim();
-    const Vec3f c = b.center();
-    alignas(16) float cv[4];
-    _mm_store_ps(cv, r.centroid());
-    EXPECT_EQ(Vec3f(cv[0], cv[1], cv[2]), c) << "a piece's centroid is its box's centre";
-    boxes_of[r.prim()].push_back(b);
-  }
-  ASSERT_EQ(boxes_of.size(), n) << "every triangle keeps at least one reference";
-  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 2)].size(), 1u) << "a point triangle is not cut";
-  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 1)].size(), 1u) << "a tiny triangle is not cut";
-  EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
-  // One thread and the default pool give the same references.
-  std::vector<BuildRef> serial;
-  {
-    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-    serial = presplit_references(s.mesh, po);
-  }
-  ASSERT_EQ(serial.size(), refs.size());
-  for (size_t i = 0; i < refs.size(); ++i) {
-    EXPECT_EQ(serial[i].prim(), refs[i].prim()) << i;
-    EXPECT_EQ(serial[i].box.aabb().lo, refs[i].box.aabb().lo) << i;
-    EXPECT_EQ(serial[i].box.aabb().hi, refs[i].box.aabb().hi) << i;
-  }
-  // No budget: one reference per triangle, its whole box.
-  po.budget = 0.0f;
-  const std::vector<BuildRef> plain = presplit_references(s.mesh, po);
-  ASSERT_EQ(plain.size(), n);
-  for (size_t i = 0; i < n; ++i) {
-    EXPECT_EQ(plain[i].prim(), i);
-    EXPECT_EQ(plain[i].box.aabb().lo, s.mesh.triangle_bounds(i).lo);
-    EXPECT_EQ(plain[i].box.aabb().hi, s.mesh.triangle_bounds(i).hi);
-  }
-}
-
 // A build reference carries its box's half area in lane 3 of hi, computed as
 // Box4::half_area computes it, and a union of references' boxes carries the
 // largest: the size split skips its pass over a node's references on it.
@@ -1221,7 +974,7 @@ TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     serial = build_binned_sah(p.boxes, p.centroids, bo);
-    serial_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
+    serial_stats = make_accelerator("bvh:preset=quality")->build(s.mesh);
   }
   check_binary_tree(serial, s.mesh, false);
   for (const BinaryBvh* t : {&pool, &pool2}) {
@@ -1234,7 +987,7 @@ TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
       ASSERT_EQ(serial.nodes[i].bounds().hi, t->nodes[i].bounds().hi) << i;
     }
   }
-  const BuildStats pool_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
+  const BuildStats pool_stats = make_accelerator("bvh:preset=quality")->build(s.mesh);
   EXPECT_EQ(pool_stats.extra.at("opt_moves"), serial_stats.extra.at("opt_moves"));
   // (a parallel sum: equal up to the order of its additions)
   EXPECT_NEAR(pool_stats.extra.at("sah_tree"), serial_stats.extra.at("sah_tree"),
@@ -1303,25 +1056,11 @@ TEST(BvhBinned, LargeReferencesGetAChildOfTheirOwn) {
   BinnedBuildStats all_stats;
   check_binary_tree(build_binned_sah(lp.boxes, lp.centroids, all, &all_stats), longs.mesh, false);
   EXPECT_EQ(all_stats.big_splits, 0u);
-  // Through the spec, where it is on by default (the family's brute-force
-  // test checks the hits).
-  const BuildStats plain = make_accelerator("bvh:opt=none,big=0,bigroot=0")->build(s.mesh);
+  // Through the spec: on with the binned builder (the family's brute-force
+  // test checks the hits), off with the others.
   const BuildStats split = make_accelerator("bvh:opt=none")->build(s.mesh);
-  EXPECT_NE(plain.extra.at("sah_tree"), split.extra.at("sah_tree"));
-  EXPECT_EQ(plain.extra.at("big_splits"), 0.0);
   EXPECT_GE(split.extra.at("big_splits"), 1.0);
-  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,big=0.1"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:builder=lbvh,bigroot=0.1"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:builder=sweep,bigmin=64"), SpecError);
-  EXPECT_NO_THROW(make_accelerator("bvh:builder=sbvh,big=0"));
-  EXPECT_THROW(make_accelerator("bvh:big=2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:bigmin=0"), SpecError);
-}
-
-TEST(BvhPresplit, SpecNeedsTheBinnedBuilder) {
-  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,presplit=0.2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:presplit=5"), SpecError);
-  EXPECT_NO_THROW(make_accelerator("bvh:builder=sweep,presplit=0"));
+  EXPECT_EQ(make_accelerator("bvh:opt=none,builder=sweep")->build(s.mesh).extra.count("big_splits"), 0u);
 }
 
 TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {
@@ -1435,51 +1174,25 @@ TEST(BvhReinsertion, LowersSahCostAndRespectsTheTimeBudget) {
   EXPECT_LT(bs.extra.at("sah_after_opt"), bs.extra.at("sah_before_opt"));
 }
 
-// bleaf=auto: single-triangle binary leaves under the reinsertion preset
-// (which moves leaves whole), 3 under the light pass, 4 without one; the
-// same trees as the explicit values.
-TEST(BvhReinsertion, AutoBinaryLeafIsOneThreeOrFour) {
-  const test::NamedMesh s = test::soup(3000, 5);
-  auto tree_of = [&](const char* spec) {
-    auto a = make_accelerator(spec);
-    const BuildStats st = a->build(s.mesh);
-    return std::make_tuple(st.nodes, st.leaves, st.extra.at("sah_tree"));
-  };
-  EXPECT_EQ(tree_of("bvh:opt=reinsert"), tree_of("bvh:opt=reinsert,bleaf=1"));
-  EXPECT_NE(tree_of("bvh:opt=reinsert"), tree_of("bvh:opt=reinsert,bleaf=4"));
-  EXPECT_EQ(tree_of("bvh"), tree_of("bvh:bleaf=3"));
-  EXPECT_NE(tree_of("bvh"), tree_of("bvh:bleaf=4"));
-  EXPECT_EQ(tree_of("bvh:opt=none"), tree_of("bvh:opt=none,bleaf=4"));
-  EXPECT_NE(tree_of("bvh:opt=none"), tree_of("bvh:opt=none,bleaf=3"));
-}
-
-// The default opt=light is four reinsertion rounds over the worst 0.5 % of
-// the nodes on 3-triangle binary leaves: the same tree as those explicit
-// values, a lower SAH cost than no optimisation on the same leaves and a
-// higher one than the preset.
-TEST(BvhReinsertion, LightDefaultIsFourRoundsOverHalfAPercent) {
+// The light pass (the default) and the full reinsertion differ in rounds,
+// batch and binary leaves (BvhConfig, test_bvh_config.cpp): the light pass
+// starts from the tree without it and lowers its SAH cost, the full one
+// lowers it further.
+TEST(BvhReinsertion, LightPassBetweenNoneAndTheFullPass) {
   const test::NamedMesh s = test::soup(3000, 5);
   auto stats_of = [&](const char* spec) {
     auto a = make_accelerator(spec);
     return a->build(s.mesh);
   };
-  auto tree_of = [&](const char* spec) {
-    const BuildStats st = stats_of(spec);
-    return std::make_tuple(st.nodes, st.leaves, st.extra.at("sah_tree"));
-  };
-  EXPECT_EQ(tree_of("bvh"), tree_of("bvh:opt=light"));
-  // (thick=auto follows opt: set alike on both sides.)
-  EXPECT_EQ(tree_of("bvh:thick=0"), tree_of("bvh:opt=reinsert,bleaf=3,opt_rounds=4,opt_batch=0.005,thick=0"));
-  EXPECT_EQ(tree_of("bvh:opt=reinsert"), tree_of("bvh:opt=light,bleaf=1,opt_rounds=32,opt_batch=0.15,thick=0"));
-  const BuildStats light = stats_of("bvh"), none = stats_of("bvh:opt=none,bleaf=3"), full = stats_of("bvh:opt=reinsert");
+  const BuildStats light = stats_of("bvh"), none = stats_of("bvh:opt=none"), full = stats_of("bvh:opt=reinsert");
   EXPECT_GE(light.extra.at("opt_rounds"), 1.0);
   EXPECT_LE(light.extra.at("opt_rounds"), 4.0);
   EXPECT_GT(light.extra.at("opt_moves"), 0.0);
+  EXPECT_GT(full.extra.at("opt_moves"), light.extra.at("opt_moves"));
   EXPECT_EQ(none.extra.count("opt_rounds"), 0u);
-  EXPECT_EQ(light.extra.at("sah_before_opt"), none.extra.at("sah_tree"));  // the same binary tree before the pass
-  EXPECT_LT(light.extra.at("sah_tree"), none.extra.at("sah_tree"));
+  EXPECT_LT(light.extra.at("sah_tree"), light.extra.at("sah_before_opt"));
   EXPECT_LT(full.extra.at("sah_tree"), light.extra.at("sah_tree"));
-  for (const char* bad : {"bvh:opt=heavy", "bvh:opt_batch=0", "bvh:opt_batch=1.5", "bvh:opt_rounds=many"})
+  for (const char* bad : {"bvh:opt=heavy", "bvh:opt_batch=0.1", "bvh:opt_rounds=4"})
     EXPECT_THROW(make_accelerator(bad), SpecError) << bad;
 }
 
@@ -1624,8 +1337,8 @@ TEST(BvhTriangleBlock, PaddingLanesRepeatTheFirstTriangle) {
 }
 
 TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
-  for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
-                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1", "bvh:layout=bvh16"}) {
+  for (const char* spec : {"bvh", "bvh:leaf=8", "bvh:leaf=32", "bvh:layout=bvh4", "bvh:layout=bvh2",
+                           "bvh:builder=sbvh,sbudget=1", "bvh:layout=bvh16", "bvh:preset=sbvh"}) {
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the radius.
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
@@ -1748,7 +1461,7 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
     m.triangles.push_back({b, b + 1, b + 2});
     m.triangles.push_back({b, b + 2, b + 3});
   }
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:block=4,leaf=1", "bvh:layout=bvh16,leaf=1"}) {
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:leaf=1", "bvh:layout=bvh16,leaf=1"}) {
     auto a = make_accelerator(spec);
     a->build(m);
     for (float z0 : {0.0f, 0.5f, 2.0f, 5.0f}) {
@@ -1926,8 +1639,8 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
         {"bvh", "bvh:packet=16"},
         {"bvh:layout=bvh8", "bvh:packet=16,layout=bvh8"},
         {"bvh:layout=bvh16", "bvh:packet=16,layout=bvh16"},
-        {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},
-        {"bvh:block=16", "bvh:packet=16,block=16"}};
+        {"bvh:leaf=4,opt=reinsert", "bvh:packet=16,leaf=4,opt=reinsert"},
+        {"bvh:leaf=48", "bvh:packet=16,leaf=48"}};
     for (const auto& [single_spec, spec] : pairs) {
       auto single = make_accelerator(single_spec);
       auto packet = make_accelerator(spec);
@@ -2075,16 +1788,13 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
                            "bvh:builder=sbvh,opt=reinsert"}) {
     auto accel = make_accelerator(spec);
     accel->build(s.mesh);
-    auto study = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "owalk=0");
-    study->build(s.mesh);
-    std::vector<Hit> octant(n), general(n), counted(n), study_hits(n);
-    std::vector<uint8_t> occ_octant(n), occ_general(n), occ_study(n);
-    TraversalStats stats;
+    std::vector<Hit> octant(n), general(n), counted(n);
+    std::vector<uint8_t> occ_octant(n), occ_general(n), occ_counted(n);
+    TraversalStats stats, occ_stats;
     accel->intersect(grouped, octant);
     accel->intersect(grouped, counted, &stats);
     accel->occluded(grouped, occ_octant);
-    study->intersect(grouped, study_hits);
-    study->occluded(grouped, occ_study);
+    accel->occluded(grouped, occ_counted, &occ_stats);
     {
       std::vector<Hit> h(n);
       std::vector<uint8_t> o(n);
@@ -2104,8 +1814,7 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
           << spec << " ray " << i << ": octant walk prim " << octant[i].prim << " t " << octant[i].t
           << ", general prim " << general[i].prim << " t " << general[i].t;
       ASSERT_EQ(std::memcmp(&octant[i], &counted[i], sizeof(Hit)), 0) << spec << " ray " << i << " (counted)";
-      ASSERT_EQ(std::memcmp(&octant[i], &study_hits[i], sizeof(Hit)), 0) << spec << " ray " << i << " (owalk=0)";
-      ASSERT_EQ(occ_octant[i], occ_study[i]) << spec << " ray " << i << " (owalk=0)";
+      ASSERT_EQ(occ_octant[i], occ_counted[i]) << spec << " ray " << i << " (counted)";
       ASSERT_EQ(occ_octant[i], occ_general[i]) << spec << " ray " << i;
       ASSERT_EQ(occ_octant[i] != 0, octant[i].valid()) << spec << " ray " << i;
     }
@@ -2115,13 +1824,12 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
 }
 
 TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
-  // bvh (ahead=1) computes each ray's box-test scalars while the ray before
-  // it walks (trace_rays_ahead) in coherent batches (octant walks, and the
-  // general walk of the specs without them); ahead=0 computes them when the
-  // ray starts, as incoherent batches always do. Every hit field and every
-  // occlusion answer must be equal, in coherent and incoherent batches, with rays
-  // that leave the fast kernel (axis-parallel, tmin < 0, invalid, an origin
-  // far beyond the scene) between ordinary ones, and as the last ray.
+  // Uncounted coherent batches compute each ray's box-test scalars while the
+  // ray before it walks (trace_rays_ahead); counted batches, and incoherent
+  // ones, compute them when the ray starts. Every hit field and every
+  // occlusion answer must be equal, in coherent and incoherent batches, with
+  // rays that leave the fast kernel (axis-parallel, tmin < 0, invalid, an
+  // origin far beyond the scene) between ordinary ones, and as the last ray.
   const test::NamedMesh s = test::soup(2000, 31);
   const Aabb box = s.mesh.bounds();
   const Vec3f centre = box.center(), half = 0.5f * (box.hi - box.lo);
@@ -2146,19 +1854,18 @@ TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
   }
   ASSERT_TRUE(batch_is_octant_coherent(coherent));
   ASSERT_FALSE(batch_is_octant_coherent(incoherent));
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:node=q8", "bvh:tri=mt", "bvh:owalk=0"}) {
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:tri=mt", "bvh:preset=sbvh"}) {
     auto ahead = make_accelerator(spec);
     ahead->build(s.mesh);
-    auto plain = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "ahead=0");
-    plain->build(s.mesh);
     for (const std::vector<Ray>* rays : {&coherent, &incoherent}) {
       const size_t n = rays->size();
       std::vector<Hit> a(n), b(n);
       std::vector<uint8_t> oa(n), ob(n);
+      TraversalStats sb, sob;
       ahead->intersect(*rays, a);
-      plain->intersect(*rays, b);
+      ahead->intersect(*rays, b, &sb);
       ahead->occluded(*rays, oa);
-      plain->occluded(*rays, ob);
+      ahead->occluded(*rays, ob, &sob);
       size_t hits = 0;
       for (size_t i = 0; i < n; ++i) {
         hits += a[i].valid();
@@ -2171,98 +1878,8 @@ TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
       EXPECT_FALSE(a.back().valid());
     }
   }
-  EXPECT_THROW(make_accelerator("bvh:ahead=0,layout=bvh2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:ahead=1,simd=0"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:ahead=2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:ahead=0"), SpecError);
 }
-
-TEST(BvhOcclusionOrder, NeedsAWideLayout) {
-  EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,layout=bvh2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:aorder=rtsah,bound=sphere"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:aorder=any"), SpecError);
-  EXPECT_NO_THROW(make_accelerator("bvh:aorder=rtsah,layout=bvh4"));
-}
-
-// ---------------------------------------------------------------------------
-// Any-hit order
-
-// Ize & Hansen's order: per node, leaves above inner children, each group in
-// ascending blocked-per-cost; the child most likely to block per unit cost
-// sits in the highest slot, which the any-hit walk visits first.
-TEST(BvhOcclusionOrder, LargeOccludersGoToTheHighestSlot) {
-  TriangleMesh m;
-  auto add = [&](Vec3f a, Vec3f b, Vec3f c) {
-    const uint32_t i = static_cast<uint32_t>(m.vertices.size());
-    m.vertices.insert(m.vertices.end(), {a, b, c});
-    m.triangles.push_back({i, i + 1, i + 2});
-  };
-  add(Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0));              // 0: fills half of its box's face
-  add(Vec3f(0, 0, 2), Vec3f(1, 1, 2), Vec3f(0.99f, 1, 2));          // 1: a diagonal sliver in a box as large
-  add(Vec3f(3, 0, 0), Vec3f(4, 0, 0), Vec3f(3, 1, 0));              // 2, 3: an inner child's two leaves
-  add(Vec3f(3, 0, 1), Vec3f(4, 0, 1), Vec3f(3, 1, 1));
-  auto leaf_box = [&](uint32_t t) { return m.triangle_bounds(t); };
-  WideTree w;
-  w.leaf_begin = {0, 1, 2, 3, 4};
-  w.leaf_prims = {1, 0, 2, 3};  // leaf i holds triangle leaf_prims[i]
-  w.nodes.resize(2);
-  Aabb inner_box = leaf_box(2);
-  inner_box.extend(leaf_box(3));
-  // Root: slot 0 the inner node, then the sliver's leaf, the large triangle's leaf (collapse order scrambled).
-  w.nodes[0].count = 3;
-  w.nodes[0].child[0] = {leaf_box(0), true, 1};
-  w.nodes[0].child[1] = {inner_box, false, 1};
-  w.nodes[0].child[2] = {leaf_box(1), true, 0};
-  w.nodes[1].count = 2;
-  w.nodes[1].child[0] = {leaf_box(2), true, 2};
-  w.nodes[1].child[1] = {leaf_box(3), true, 3};
-  w.root_box = inner_box;
-  w.root_box.extend(leaf_box(0));
-  w.root_box.extend(leaf_box(1));
-  const double blocked = order_children_for_occlusion(w, m, {2.0f, 1.0f, 8});
-  const WideTree::Node& r = w.nodes[0];
-  ASSERT_EQ(r.count, 3);
-  EXPECT_FALSE(r.child[0].leaf);
-  EXPECT_EQ(r.child[0].index, 1u);
-  EXPECT_TRUE(r.child[1].leaf);
-  EXPECT_EQ(r.child[1].index, 0u) << "the sliver below";
-  EXPECT_TRUE(r.child[2].leaf);
-  EXPECT_EQ(r.child[2].index, 1u) << "the large triangle in the highest slot";
-  EXPECT_TRUE(r.child[2].box.lo == leaf_box(0).lo && r.child[2].box.hi == leaf_box(0).hi) << "boxes move with their children";
-  // A flat leaf box: its half area is the triangle's box face, the triangle half of it.
-  const double p_large = 0.5;
-  EXPECT_GT(blocked, 0.0);
-  EXPECT_LT(blocked, 1.0);
-  // The root's chance is at least the large leaf's share of the root.
-  EXPECT_GE(blocked, p_large * leaf_box(0).half_area() / w.root_box.half_area() - 1e-9);
-  // Equal priorities keep the collapse's order (stable): the inner node's two equal leaves.
-  EXPECT_EQ(w.nodes[1].child[0].index, 2u);
-  EXPECT_EQ(w.nodes[1].child[1].index, 3u);
-}
-
-TEST(BvhOcclusionOrder, SameClosestHitsAndOcclusionAsTheSlotOrder) {
-  const test::NamedMesh s = test::soup(3000, 23);
-  const std::vector<Ray> rays = test::segment_rays(s.mesh, 4000, 9);
-  auto a = make_accelerator("bvh"), b = make_accelerator("bvh:aorder=rtsah");
-  const BuildStats sa = a->build(s.mesh), sb = b->build(s.mesh);
-  EXPECT_EQ(sa.nodes, sb.nodes);
-  EXPECT_EQ(sa.sah_cost, sb.sah_cost);
-  EXPECT_GT(sb.extra.at("occlusion_root"), 0.0);
-  std::vector<Hit> ha(rays.size()), hb(rays.size());
-  std::vector<uint8_t> oa(rays.size()), ob(rays.size());
-  a->intersect(rays, ha);
-  b->intersect(rays, hb);
-  a->occluded(rays, oa);
-  b->occluded(rays, ob);
-  size_t occluded = 0;
-  for (size_t i = 0; i < rays.size(); ++i) {
-    ASSERT_EQ(ha[i].prim, hb[i].prim) << i;
-    ASSERT_EQ(ha[i].t, hb[i].t) << i;
-    ASSERT_EQ(oa[i], ob[i]) << i;
-    occluded += oa[i];
-  }
-  EXPECT_GT(occluded, rays.size() / 10);
-}
-
 
 TEST(BvhSimd, SixteenLanesComputeWhatEachLaneDefines) {
   // vfloat<16> is one AVX-512 register, two AVX2 halves or an array,
