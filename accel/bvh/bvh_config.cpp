@@ -50,9 +50,13 @@ BvhParam row(ParamInfo info) {
 }
 
 std::string preset_help() {
-  std::string s = "what the build favours, as settings of the parameters below (a parameter given beside it wins):";
-  for (const auto& pr : bvh_presets())
-    s += fmt::format(" {} ({}{}{})", pr.name, *pr.params ? pr.params : "", *pr.params ? ": " : "", pr.tradeoff);
+  std::string s = "what the build favours, as values of the parameters below (one given beside it wins; measured "
+                  "against the default on the interior views, docs/structures/bvh.md):";
+  const char* sep = " ";
+  for (const auto& pr : bvh_presets()) {
+    s += fmt::format("{}{} = {}{}{}", sep, pr.name, *pr.params ? pr.params : "", *pr.params ? ", " : "", pr.tradeoff);
+    sep = "; ";
+  }
   return s;
 }
 
@@ -129,10 +133,12 @@ int BvhConfig::width() const {
 const std::vector<BvhPresetInfo>& bvh_presets() {
   // The trade-offs: docs/structures/bvh.md, "Presets" (the command and machine there).
   static const std::vector<BvhPresetInfo> presets = {
-      {"fast", "opt=none", "no reinsertion pass"},
+      {"fast", "opt=none", "no reinsertion pass: build 0.75-0.8x the default's, rays 0.7x (shadow) to 0.96x"},
       {"default", "", "the defaults below"},
-      {"quality", "opt=reinsert", "the full reinsertion pass"},
-      {"sbvh", "builder=sbvh,smin=4000,opt=reinsert", "spatial splits at large nodes, the full reinsertion pass"},
+      {"quality", "opt=reinsert", "the full reinsertion pass: build 3-19x, rays 1.0-1.04x"},
+      {"sbvh", "builder=sbvh,smin=4000,opt=reinsert",
+       "spatial splits at nodes of 4000 references or more, the full pass: build 5-15x, camera rays 1.09x, "
+       "shadow rays 0.8x"},
   };
   return presets;
 }
