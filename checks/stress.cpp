@@ -110,7 +110,7 @@ std::vector<std::string> stress_specs_for(const StressScenario& sc, const std::v
       if (key == "tri" || !v.params.count(key)) v.params.insert_or_assign(key, value);
     }
     // A variant the spec's other parameters rule out (bvh's is tri=mt on
-    // the bvh2 layout, which node=q8 or packet=16 exclude) is replaced by its
+    // the bvh2 layout, which packet=16 excludes) is replaced by its
     // triangle test alone on the spec's own structure, or dropped.
     if (!spec_is_valid(v.to_string())) {
       if (!variant_spec.params.count("tri")) continue;

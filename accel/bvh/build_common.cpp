@@ -19,6 +19,18 @@ std::vector<BuildRef> make_build_refs(std::span<const Aabb> boxes, std::span<con
   return refs;
 }
 
+std::vector<BuildRef> triangle_build_refs(const TriangleMesh& mesh) {
+  const size_t n = mesh.num_triangles();
+  std::vector<BuildRef> refs(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Aabb b = mesh.triangle_bounds(i);
+      refs[i] = BuildRef::make(b, b.center(), static_cast<uint32_t>(i));
+    }
+  });
+  return refs;
+}
+
 std::vector<uint32_t> subtree_ref_counts(std::span<const Bvh2Node> nodes) {
   std::vector<uint32_t> counts(nodes.size(), 0);
   for (size_t i = nodes.size(); i-- > 0;) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "accel/bvh/bvh2_node.h"
+#include "base/triangle_mesh.h"
 
 namespace raylab {
 
@@ -118,6 +119,11 @@ struct BuildRef {
 
 // One reference per primitive, built in parallel.
 std::vector<BuildRef> make_build_refs(std::span<const Aabb> boxes, std::span<const Vec3f> centroids);
+
+// One reference per triangle, its box (centroid: the box's centre), built in
+// parallel: the binned builder's input. The triangle boxes are computed here,
+// not kept in an array of their own (fresh pages cost page faults).
+std::vector<BuildRef> triangle_build_refs(const TriangleMesh& mesh);
 
 // Options shared by the top-down builders.
 struct BuildOptions {

@@ -132,18 +132,6 @@ struct SpatialSplit {
   uint32_t left_count = 0, right_count = 0;
 };
 
-// True when the box is thinner than kAxisPlanarFraction of its largest
-// extent along some axis (an axis-planar reference: SbvhOptions::split_planar).
-bool axis_planar(const Box4& box) {
-  float lo = std::numeric_limits<float>::infinity(), hi = 0.0f;
-  for (int a = 0; a < 3; ++a) {
-    const float e = box.hi_at(a) - box.lo_at(a);
-    lo = std::min(lo, e);
-    hi = std::max(hi, e);
-  }
-  return lo <= kAxisPlanarFraction * hi;
-}
-
 // Uniform slabs over the node's bounds along each axis.
 struct SlabGrid {
   float lo[3], width[3], inv_width[3];
@@ -224,18 +212,8 @@ class SbvhBuilder {
   // Clips one reference into the slabs it spans along axis a.
   void bin_spatial_ref(const BuildRef& r, const SlabGrid& g, SpatialBins& sb) const {
     const uint32_t prim = r.prim();
-    const bool whole = !opt_.split_planar && axis_planar(r.box);
     for (int a = 0; a < 3; ++a) {
       if (g.inv_width[a] <= 0.0f) continue;
-      if (whole) {
-        // Never cut: counted, whole, in the slab of its centroid, the side
-        // partition_spatial sends it to.
-        const int b = g.bin(a, 0.5f * (r.box.lo_at(a) + r.box.hi_at(a)));
-        sb.enter[a][b]++;
-        sb.exit[a][b]++;
-        sb.add(a, b, r.box);
-        continue;
-      }
       const int b0 = g.bin(a, r.box.lo_at(a));
       const int b1 = g.bin(a, r.box.hi_at(a));
       sb.enter[a][b0]++;
@@ -318,11 +296,6 @@ class SbvhBuilder {
       }
       if (lo >= s.pos) {
         right.push_back(r);
-        continue;
-      }
-      if (!opt_.split_planar && axis_planar(r.box)) {
-        // As binned (bin_spatial_ref): whole, on its centroid's side.
-        (0.5f * (lo + hi) < s.pos ? left : right).push_back(r);
         continue;
       }
       const float la = lb.half_area(), ra = rb.half_area();

@@ -54,20 +54,7 @@ struct SbvhOptions {
   // references: they pay off where large triangles straddle big nodes, and
   // trying them at every small node dominates build time.
   size_t min_spatial_refs = 0;
-  // Whether spatial splits may cut axis-planar references (boxes thinner
-  // than kAxisPlanarFraction of their largest extent along some axis: floors,
-  // walls, ceilings of architectural scenes). On the interior views these
-  // cuts are what spatial splits near the root do: camera rays test a
-  // quarter to two thirds fewer boxes on the Sponza-based scenes, shadow rays
-  // 4-46 % more, along their whole length (not only near the surfaces they
-  // start on). Kept whole, such a reference goes to the side of its centroid
-  // (docs/bvh-speed.md, session 27).
-  bool split_planar = true;
 };
-
-// Fraction of a reference's largest box extent under which its smallest one
-// makes it axis-planar (SbvhOptions::split_planar).
-inline constexpr float kAxisPlanarFraction = 1.0f / 1024.0f;
 
 struct SbvhStats {
   size_t references = 0;      // references in the final tree (>= primitives)

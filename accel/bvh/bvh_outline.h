@@ -10,8 +10,8 @@ namespace raylab {
 
 void outline_bvh2(const Bvh2Layout& layout, int max_depth, StructureOutline& out);
 
-template <int N, int W, typename Node>
-void outline_wide(const WideBvh<N, W, Node>& bvh, int max_depth, StructureOutline& out) {
+template <int N, int W>
+void outline_wide(const WideBvh<N, W>& bvh, int max_depth, StructureOutline& out) {
   out.what = "BVH" + std::to_string(N) + " node boxes";
   if (bvh.root_ref == wide_ref::kEmpty) return;
   if (!out.add(OutlineBox{bvh.root_box, 0, wide_ref::is_leaf(bvh.root_ref)})) return;
@@ -22,7 +22,7 @@ void outline_wide(const WideBvh<N, W, Node>& bvh, int max_depth, StructureOutlin
     const auto [index, depth] = stack.back();
     stack.pop_back();
     if (depth > max_depth) continue;
-    const Node& node = bvh.nodes[index];
+    const WideNode<N>& node = bvh.nodes[index];
     for (int c = 0; c < N; ++c) {
       const uint32_t ref = node.child[c];
       if (ref == wide_ref::kEmpty) continue;

@@ -49,15 +49,15 @@ struct alignas(64) WideNode {
 };
 
 // Nodes plus triangle blocks; the root is wide node 0 unless root_ref is a
-// leaf. Node: WideNode<N>, or the compressed QuantNode8 (quantized_node.h).
-template <int N, int W, typename Node = WideNode<N>>
+// leaf.
+template <int N, int W>
 struct WideBvh {
-  HugePageVector<Node> nodes;
+  HugePageVector<WideNode<N>> nodes;
   HugePageVector<TriangleBlock<W>> blocks;
   uint32_t root_ref = wide_ref::kEmpty;
   Aabb root_box;
 
-  size_t bytes() const { return nodes.size() * sizeof(Node) + blocks.size() * sizeof(TriangleBlock<W>); }
+  size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock<W>); }
 };
 
 // Converts the collapsed tree into nodes and blocks (parallel over leaves).

@@ -44,7 +44,6 @@
 #include <type_traits>
 
 #include "accel/bvh/bvh_wide_node.h"
-#include "accel/bvh/quantized_node.h"
 #include "accel/core/hit_recorder.h"
 #include "accel/bvh/sort_network.h"
 #include "accel/core/simd/triangle_block.h"
@@ -67,9 +66,9 @@ inline bool wide_stack_fits(int max_depth) {
   return max_depth * (N - 1) + 2 * N <= kWideStackSize;
 }
 
-template <int N, int W, typename Node = WideNode<N>>
+template <int N, int W>
 struct WideView {
-  const Node* nodes = nullptr;
+  const WideNode<N>* nodes = nullptr;
   const TriangleBlock<W>* blocks = nullptr;
   uint32_t root_ref = wide_ref::kEmpty;
   // Rays whose origin has a coordinate above this in magnitude take the exact
@@ -249,17 +248,10 @@ template <typename V>
 }
 
 // The planes at float offset `off` of a node (off = plane * N, as
-// WideNodeRay's offsets): loaded, or decoded from the compressed node's bytes
-// (exactly: see quantized_node.h), which puts a conversion and one
-// multiply-add before the box test's.
+// WideNodeRay's offsets).
 template <int N>
-[[gnu::always_inline]] inline simd::vfloat<N> node_planes(const WideNode<N>& node, int off, int /*axis*/) {
+[[gnu::always_inline]] inline simd::vfloat<N> node_planes(const WideNode<N>& node, int off) {
   return simd::vfloat<N>::load(&node.bounds[0][0] + off);
-}
-[[gnu::always_inline]] inline simd::vfloat<8> node_planes(const QuantNode8& node, int off, int axis) {
-  using V = simd::vfloat<8>;
-  // Plane p's bytes start at p * 8 = off.
-  return fmadd(simd::u8_to_float8(&node.q[0][0] + off), V::broadcast(node.cell(axis)), V::broadcast(node.origin[axis]));
 }
 
 // The float offset of axis a's near (or far) planes in a node: the ray's, or
@@ -283,23 +275,23 @@ template <int N, int kOctant, bool kNear>
 // kOctant: -1, or the ray's direction octant (bit a set when dir[a] is
 // negative, as init_node_ray's sign mask), which makes the plane offsets
 // constants (traverse_wide_octant below).
-template <int N, bool kExact, int kOctant = -1, typename Node>
-[[gnu::always_inline]] inline uint32_t intersect_children(const Node& node, const WideNodeRay<N>& r,
+template <int N, bool kExact, int kOctant = -1>
+[[gnu::always_inline]] inline uint32_t intersect_children(const WideNode<N>& node, const WideNodeRay<N>& r,
                                                           simd::vfloat<N> tmin, simd::vfloat<N> tmax,
                                                           simd::vfloat<N>& tnear) {
   using V = simd::vfloat<N>;
-  const auto plane = [&](int off, int axis) { return node_planes(node, off, axis); };
+  const auto plane = [&](int off) { return node_planes(node, off); };
   // tmax is padded like the far planes: the computed entry distance may
   // exceed the true one by a few ulps, and a box holding a hit closer than
   // the current one by less than that must not be culled.
 #if defined(RAYLAB_SIMD_FMA)
   if constexpr (!kExact) {
-    const V nx = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 0), 0), r.inv[0], r.near_shift[0]);
-    const V ny = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 1), 1), r.inv[1], r.near_shift[1]);
-    const V nz = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 2), 2), r.inv[2], r.near_shift[2]);
-    const V fx = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 0), 0), r.inv[0], r.far_shift[0]);
-    const V fy = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 1), 1), r.inv[1], r.far_shift[1]);
-    const V fz = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 2), 2), r.inv[2], r.far_shift[2]);
+    const V nx = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 0)), r.inv[0], r.near_shift[0]);
+    const V ny = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 1)), r.inv[1], r.near_shift[1]);
+    const V nz = fmadd(plane(wide_plane_offset<N, kOctant, true>(r, 2)), r.inv[2], r.near_shift[2]);
+    const V fx = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 0)), r.inv[0], r.far_shift[0]);
+    const V fy = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 1)), r.inv[1], r.far_shift[1]);
+    const V fz = fmadd(plane(wide_plane_offset<N, kOctant, false>(r, 2)), r.inv[2], r.far_shift[2]);
     // Integer-order min/max (kernel precondition: tmin >= +0). The near
     // distance includes tmin, so its maximum is >= 0 and exact. A negative
     // far distance may not be the true minimum, but any negative one culls
@@ -309,12 +301,12 @@ template <int N, bool kExact, int kOctant = -1, typename Node>
     return padded_slab_mask(tnear, min_bits(min_bits(fx, fy), min_bits(fz, tmax)));
   }
 #endif
-  const V nx = (plane(wide_plane_offset<N, kOctant, true>(r, 0), 0) - r.org[0]) * r.inv[0];
-  const V ny = (plane(wide_plane_offset<N, kOctant, true>(r, 1), 1) - r.org[1]) * r.inv[1];
-  const V nz = (plane(wide_plane_offset<N, kOctant, true>(r, 2), 2) - r.org[2]) * r.inv[2];
-  const V fx = (plane(wide_plane_offset<N, kOctant, false>(r, 0), 0) - r.org[0]) * r.inv[0];
-  const V fy = (plane(wide_plane_offset<N, kOctant, false>(r, 1), 1) - r.org[1]) * r.inv[1];
-  const V fz = (plane(wide_plane_offset<N, kOctant, false>(r, 2), 2) - r.org[2]) * r.inv[2];
+  const V nx = (plane(wide_plane_offset<N, kOctant, true>(r, 0)) - r.org[0]) * r.inv[0];
+  const V ny = (plane(wide_plane_offset<N, kOctant, true>(r, 1)) - r.org[1]) * r.inv[1];
+  const V nz = (plane(wide_plane_offset<N, kOctant, true>(r, 2)) - r.org[2]) * r.inv[2];
+  const V fx = (plane(wide_plane_offset<N, kOctant, false>(r, 0)) - r.org[0]) * r.inv[0];
+  const V fy = (plane(wide_plane_offset<N, kOctant, false>(r, 1)) - r.org[1]) * r.inv[1];
+  const V fz = (plane(wide_plane_offset<N, kOctant, false>(r, 2)) - r.org[2]) * r.inv[2];
   tnear = max(nx, max(ny, max(nz, tmin)));
   const V tfar0 = min(fx, min(fy, min(fz, tmax)));
   // Padded outward in both signs (negative far distances arise when tmin < 0).
@@ -436,11 +428,10 @@ RAYLAB_NO_VECTORIZE inline bool intersect_leaf_scalar(const TriangleBlock<W>* bl
 // are (more likely) in cache when popped.
 inline constexpr int kPrefetchLeafLines = 5;  // an 8-wide triangle block (320 bytes)
 
-template <int N, int W, typename Node>
-[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W, Node>& bvh, uint32_t ref) {
-  // Four lines for the float nodes (a 256-byte 8-wide node; a 4-wide node and its neighbour), seven for
-  // a 448-byte 16-wide node, two for the compressed.
-  constexpr int kPrefetchNodeLines = std::is_same_v<Node, QuantNode8> ? 2 : N == 16 ? 7 : 4;
+template <int N, int W>
+[[gnu::always_inline]] inline void prefetch_child(const WideView<N, W>& bvh, uint32_t ref) {
+  // Four lines for a 256-byte 8-wide node (a 4-wide node and its neighbour), seven for a 448-byte 16-wide node.
+  constexpr int kPrefetchNodeLines = N == 16 ? 7 : 4;
   const char* p = wide_ref::is_leaf(ref) ? reinterpret_cast<const char*>(bvh.blocks + wide_ref::leaf_first(ref))
                                          : reinterpret_cast<const char*>(bvh.nodes + ref);
   const int lines = wide_ref::is_leaf(ref) ? kPrefetchLeafLines : kPrefetchNodeLines;
@@ -454,8 +445,8 @@ template <int N, int W, typename Node>
 // first (one test may end the ray), then children in descending slot order
 // (as Embree's occlusion traversal); measured best on the benchmark scenes.
 // Pushes all but one child (prefetched) and returns the one to visit next.
-template <int N, bool kScalar, int W, typename Node>
-[[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
+template <int N, bool kScalar, int W>
+[[gnu::always_inline]] inline uint32_t descend_any_hit(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
                                                        uint64_t*& top) {
   uint32_t leaves = 0;
   if constexpr (kScalar) {
@@ -638,8 +629,8 @@ template <int N, bool kScalar = false, typename Prefetch>
   return key_ref(*top);
 }
 
-template <int N, int W, bool kScalar = false, typename Node>
-[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W, Node>& bvh, const uint32_t* child, uint32_t mask,
+template <int N, int W, bool kScalar = false>
+[[gnu::always_inline]] inline uint32_t descend_closest(const WideView<N, W>& bvh, const uint32_t* child, uint32_t mask,
                                                        simd::vfloat<N> tnear, uint64_t*& top) {
   // always_inline: GCC 12 found this lambda free of side effects (a prefetch
   // is not one) and deleted its calls before inlining it, so closest-hit
@@ -653,8 +644,8 @@ template <int N, int W, bool kScalar = false, typename Node>
 // Counting (kCount): a node visited is a child box tested, so an inner node
 // counts its non-empty child slots (accel/core/hit_recorder.h); the root's
 // box is not tested.
-template <int N, typename Node>
-inline uint64_t count_children(const Node& node) {
+template <int N>
+inline uint64_t count_children(const WideNode<N>& node) {
   uint64_t c = 0;
   for (int i = 0; i < N; ++i) c += node.child[i] != wide_ref::kEmpty;
   return c;
@@ -665,16 +656,16 @@ inline uint64_t count_children(const Node& node) {
 // diverged rays over this way). Returns when the subtree is done or, any
 // hit, at the first hit.
 // kTest: the leaf test, watertight, or Moller-Trumbore on blocks holding
-// edges (tri=mt, a study option; never with kScalar).
+// edges (tri=mt, the non-watertight option; never with kScalar).
 template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar = false,
-          TriangleTest kTest = TriangleTest::Watertight, int kOctant = -1, typename Node>
-inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec,
+          TriangleTest kTest = TriangleTest::Watertight, int kOctant = -1>
+inline void walk_wide(const WideView<N, W>& view, const Ray& ray, uint32_t start, HitRecorder<kAnyHit, kCount>& rec,
                       const NodeRayScalars* ahead = nullptr) {
   static_assert(!(kScalar && kTest != TriangleTest::Watertight), "simd=0 tests watertight only");
   static_assert(kOctant < 0 || (!kScalar && !kAxisParallel), "octant walks: vector tests, rays that are not axis-parallel");
   // A copy: the stores of the walk (stack, hit) could alias the caller's
   // view, so GCC reloaded the node array's address through it at every node.
-  const WideView<N, W, Node> bvh = view;
+  const WideView<N, W> bvh = view;
   using V = simd::vfloat<N>;
   constexpr bool kExact = kAxisParallel || !RAYLAB_HAS_FMA;
   WideNodeRay<N> nr;
@@ -741,7 +732,7 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
 
   while (true) {
     if (!wide_ref::is_leaf(cur)) {
-      const Node& node = bvh.nodes[cur];
+      const WideNode<N>& node = bvh.nodes[cur];
       if constexpr (kCount) rec.count_inner(count_children<N>(node));
       V tnear;
       uint32_t mask;
@@ -784,8 +775,8 @@ inline void walk_wide(const WideView<N, W, Node>& view, const Ray& ray, uint32_t
   }
 }
 
-template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar, TriangleTest kTest, typename Node>
-inline Hit traverse_wide_kernel(const WideView<N, W, Node>& bvh, const Ray& ray, TraversalStats* stats,
+template <int N, int W, bool kAnyHit, bool kCount, bool kAxisParallel, bool kScalar, TriangleTest kTest>
+inline Hit traverse_wide_kernel(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats,
                                const NodeRayScalars* ahead = nullptr) {
   HitRecorder<kAnyHit, kCount> rec(ray, stats);
   walk_wide<N, W, kAnyHit, kCount, kAxisParallel, kScalar, kTest>(bvh, ray, bvh.root_ref, rec, ahead);
@@ -796,9 +787,8 @@ inline Hit traverse_wide_kernel(const WideView<N, W, Node>& bvh, const Ray& ray,
 // kind. kScalar: the scalar tests of `bvh:simd=0`; kTest: see walk_wide.
 // ahead (optional): the ray's node_ray_scalars, computed before (used when
 // the ray takes the FMA kernel, whose rays are not axis-parallel).
-template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight,
-          typename Node>
-inline Hit traverse_wide(const WideView<N, W, Node>& bvh, const Ray& ray, TraversalStats* stats,
+template <int N, int W, bool kAnyHit, bool kCount, bool kScalar = false, TriangleTest kTest = TriangleTest::Watertight>
+inline Hit traverse_wide(const WideView<N, W>& bvh, const Ray& ray, TraversalStats* stats,
                          const NodeRayScalars* ahead = nullptr) {
   // The fast kernel needs finite reciprocals, tmin >= 0 (see
   // intersect_children) and an origin not far beyond the scene
@@ -846,8 +836,8 @@ inline bool batch_is_octant_coherent(std::span<const Ray> rays) {
 
 // ahead (optional): the ray's node_ray_scalars, computed before (used when
 // the ray takes the FMA kernel, whose rays are not axis-parallel).
-template <int N, int W, bool kAnyHit, typename Node>
-inline Hit traverse_wide_octant(const WideView<N, W, Node>& bvh, const Ray& ray, const NodeRayScalars* ahead = nullptr) {
+template <int N, int W, bool kAnyHit>
+inline Hit traverse_wide_octant(const WideView<N, W>& bvh, const Ray& ray, const NodeRayScalars* ahead = nullptr) {
   if (!ray_takes_fma_kernel(ray, bvh.fma_origin_limit)) [[unlikely]]
     return traverse_wide<N, W, kAnyHit, false>(bvh, ray, nullptr);
   HitRecorder<kAnyHit, false> rec(ray, nullptr);
@@ -873,11 +863,9 @@ inline Hit traverse_wide_octant(const WideView<N, W, Node>& bvh, const Ray& ray,
 // are computed before the ray ahead of it walks, so their latency hides
 // behind that walk instead of delaying the first node test after the
 // mispredicted end of the walk before: camera rays +2 to +5 % in three of
-// five series, level in the two run on a quieter machine (docs/bvh-speed.md,
-// session 23). Answers are the same: the scalars are the ones init_node_ray
-// computes.
-// ahead = false (bvh:ahead=0, a study option): each ray's scalars when it
-// starts, as before.
+// five series, level in the two run on a quieter machine (docs/structures/bvh.md).
+// Answers are the same: the scalars are the ones init_node_ray computes.
+// ahead = false (incoherent batches): each ray's scalars when it starts.
 template <typename Walk, typename Out>
 inline void trace_rays_ahead(std::span<const Ray> rays, [[maybe_unused]] bool ahead, Walk&& walk, Out&& out) {
 #if defined(__AVX__)

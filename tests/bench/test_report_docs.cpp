@@ -70,7 +70,7 @@ TEST(ReportDocs, EveryExtraStatisticIsDocumented) {
   const Scene scene = load_scene("soup:n=400");
   // Every family, plus the variants that add statistics of their own.
   std::vector<std::string> specs = expand_accelerator_list("all");
-  for (const char* s : {"bvh:builder=sbvh", "bvh:opt=reinsert,opt_rounds=2", "bvh:layout=bvh2", "bvh:layout=bvh4",
+  for (const char* s : {"bvh:builder=sbvh", "bvh:preset=quality", "bvh:layout=bvh2", "bvh:layout=bvh4",
                         "kdtree:builder=median", "embree:robust=1"})
     specs.push_back(s);
   size_t seen = 0;

@@ -226,7 +226,7 @@ TEST(BvhBuilders, SweepIsNoWorseThanBinnedAndLbvhNoBetter) {
 // Triangles that coincide (the same three vertices, as in real meshes with
 // doubled faces) have one centroid, so no object split separates them; a
 // spatial split cannot either (every plane puts all of them on both sides).
-// With single-triangle leaves (bleaf=1) such a node must still end in a
+// With single-triangle binary leaves such a node must still end in a
 // median split, not in spatial splits that copy every reference into both
 // children until the duplication budget is spent (it was: 1.5 references per
 // triangle, twice the memory, on sponza and dragon_in_sponza).
@@ -293,52 +293,6 @@ TEST(BvhSbvh, ReferencesCoverTheirTriangles) {
   EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
 }
 
-// sflat=0 (SbvhOptions::split_planar = false): spatial splits never cut an
-// axis-planar triangle (a floor under long thin triangles), still cut the
-// others, and the references still cover every triangle.
-TEST(BvhSbvh, AxisPlanarTrianglesStayWholeWithoutSplitPlanar) {
-  // Small triangles filling the unit cube, a few long ones across it, and a
-  // floor through its middle (y = 0.5).
-  test::NamedMesh s = test::soup(400, 47, 0.05f);
-  s.mesh.append(test::soup(40, 5, 3.0f).mesh);
-  TriangleMesh floor;
-  floor.vertices = {Vec3f(-0.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, -0.1f), Vec3f(1.1f, 0.5f, 1.1f),
-                    Vec3f(-0.1f, 0.5f, 1.1f)};
-  floor.triangles = {{0, 1, 2}, {0, 2, 3}};
-  const uint32_t first_floor = static_cast<uint32_t>(s.mesh.num_triangles());
-  s.mesh.append(floor);
-  const Prims p = prims_of(s.mesh);
-  auto references_of_floor = [&](const BinaryBvh& t) {
-    size_t refs = 0;
-    for (uint32_t id : t.prim_ids) refs += id >= first_floor;
-    return refs;
-  };
-  for (bool split_planar : {true, false}) {
-    SCOPED_TRACE(split_planar ? "split_planar" : "whole");
-    SbvhOptions so;
-    so.alpha = 0.0f;
-    so.split_budget = 1.0f;
-    so.spatial_bins = 16;
-    so.split_planar = split_planar;
-    SbvhStats st;
-    const BinaryBvh t = build_sbvh(p.boxes, p.centroids, TriangleSplitter(s.mesh), so, &st);
-    check_binary_tree(t, s.mesh, true);
-    EXPECT_GT(st.spatial_splits, 5u) << "the long triangles are still cut";
-    if (split_planar) EXPECT_GT(references_of_floor(t), 2u) << "the floor spans the scene: cut by the first splits";
-    else EXPECT_EQ(references_of_floor(t), 2u);
-    std::map<uint32_t, std::vector<Aabb>> boxes_of;
-    for (const Bvh2Node& n : t.nodes)
-      if (is_leaf(n))
-        for (uint32_t k = n.index; k < n.index + n.count; ++k) boxes_of[t.prim_ids[k]].push_back(n.bounds());
-    EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
-  }
-  // Through the spec: the same hits as without spatial splits (checked by
-  // the family's brute-force test); here, that the option reaches the builder.
-  const auto with = make_accelerator("bvh:builder=sbvh,alpha=0,sbudget=1");
-  const auto without = make_accelerator("bvh:builder=sbvh,alpha=0,sbudget=1,sflat=0");
-  const BuildStats sw = with->build(s.mesh), so = without->build(s.mesh);
-  EXPECT_GT(sw.extra.at("refs_per_triangle"), so.extra.at("refs_per_triangle"));
-}
 
 TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {
   const test::NamedMesh s = test::soup(200, 53, 2.0f);
@@ -380,70 +334,7 @@ TEST(BvhSbvh, SplitterBoxesEncloseTheExactCrossing) {
   EXPECT_GT(crossings, 100u);
 }
 
-// Pre-splitting (presplit.h): the pieces of each triangle lie inside its box
-// and cover it, the budget bounds the references, the long triangles are the
-// ones cut, and the result does not depend on the thread count.
-TEST(BvhPresplit, PiecesCoverTheirTrianglesWithinTheBudget) {
-  // Long thin triangles across a box (they are what pre-splitting is for),
-  // with a few small ones and a degenerate one.
-  test::NamedMesh s = test::soup(300, 47, 3.0f);
-  TriangleMesh extra;
-  extra.vertices = {Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f), Vec3f(0.1f, 0.1f, 0.1f),
-                    Vec3f(0.5f, 0.5f, 0.5f), Vec3f(0.51f, 0.5f, 0.5f), Vec3f(0.5f, 0.51f, 0.5f)};
-  extra.triangles = {{0, 1, 2}, {3, 4, 5}};
-  s.mesh.append(extra);
-  const size_t n = s.mesh.num_triangles();
-  PresplitOptions po;
-  po.budget = 0.5f;
-  PresplitStats st;
-  const std::vector<BuildRef> refs = presplit_references(s.mesh, po, &st);
-  EXPECT_GT(refs.size(), n + n / 4) << "most of the budget is spent on a scene of long triangles";
-  EXPECT_LE(refs.size(), n + static_cast<size_t>(0.5 * n)) << "split budget";
-  EXPECT_GT(st.triangles_split, 20u);
-  std::map<uint32_t, std::vector<Aabb>> boxes_of;
-  for (const BuildRef& r : refs) {
-    const Aabb b = r.box.aabb();
-    ASSERT_LT(r.prim(), n);
-    ASSERT_FALSE(b.is_empty());
-    EXPECT_TRUE(s.mesh.triangle_bounds(r.prim()).contains(b)) << "piece of triangle " << r.prim();
-    const Vec3f c = b.center();
-    alignas(16) float cv[4];
-    _mm_store_ps(cv, r.centroid());
-    EXPECT_EQ(Vec3f(cv[0], cv[1], cv[2]), c) << "a piece's centroid is its box's centre";
-    boxes_of[r.prim()].push_back(b);
-  }
-  ASSERT_EQ(boxes_of.size(), n) << "every triangle keeps at least one reference";
-  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 2)].size(), 1u) << "a point triangle is not cut";
-  EXPECT_EQ(boxes_of[static_cast<uint32_t>(n - 1)].size(), 1u) << "a tiny triangle is not cut";
-  EXPECT_EQ(uncovered_points(s.mesh, boxes_of), 0u);
-  // One thread and the default pool give the same references.
-  std::vector<BuildRef> serial;
-  {
-    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-    serial = presplit_references(s.mesh, po);
-  }
-  ASSERT_EQ(serial.size(), refs.size());
-  for (size_t i = 0; i < refs.size(); ++i) {
-    EXPECT_EQ(serial[i].prim(), refs[i].prim()) << i;
-    EXPECT_EQ(serial[i].box.aabb().lo, refs[i].box.aabb().lo) << i;
-    EXPECT_EQ(serial[i].box.aabb().hi, refs[i].box.aabb().hi) << i;
-  }
-  // No budget: one reference per triangle, its whole box.
-  po.budget = 0.0f;
-  const std::vector<BuildRef> plain = presplit_references(s.mesh, po);
-  ASSERT_EQ(plain.size(), n);
-  for (size_t i = 0; i < n; ++i) {
-    EXPECT_EQ(plain[i].prim(), i);
-    EXPECT_EQ(plain[i].box.aabb().lo, s.mesh.triangle_bounds(i).lo);
-    EXPECT_EQ(plain[i].box.aabb().hi, s.mesh.triangle_bounds(i).hi);
-  }
-}
 
-TEST(BvhPresplit, SpecNeedsTheBinnedBuilder) {
-  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,presplit=0.2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:presplit=5"), SpecError);
-  EXPECT_NO_THROW(make_accelerator("bvh:builder=sweep,presplit=0"));
-}
 
 // A build reference carries its box's half area in lane 3 of hi, computed as
 // Box4::half_area computes it, and a union of references' boxes carries the
@@ -499,7 +390,7 @@ TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     serial = build_binned_sah(p.boxes, p.centroids, bo);
-    serial_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
+    serial_stats = make_accelerator("bvh:preset=quality")->build(s.mesh);
   }
   check_binary_tree(serial, s.mesh, false);
   for (const BinaryBvh* t : {&pool, &pool2}) {
@@ -512,7 +403,7 @@ TEST(BvhBinned, OneThreadAndThePoolBuildTheSameTree) {
       ASSERT_EQ(serial.nodes[i].bounds().hi, t->nodes[i].bounds().hi) << i;
     }
   }
-  const BuildStats pool_stats = make_accelerator("bvh:opt=reinsert,opt_rounds=3")->build(s.mesh);
+  const BuildStats pool_stats = make_accelerator("bvh:preset=quality")->build(s.mesh);
   EXPECT_EQ(pool_stats.extra.at("opt_moves"), serial_stats.extra.at("opt_moves"));
   // (a parallel sum: equal up to the order of its additions)
   EXPECT_NEAR(pool_stats.extra.at("sah_tree"), serial_stats.extra.at("sah_tree"),
@@ -581,19 +472,11 @@ TEST(BvhBinned, LargeReferencesGetAChildOfTheirOwn) {
   BinnedBuildStats all_stats;
   check_binary_tree(build_binned_sah(lp.boxes, lp.centroids, all, &all_stats), longs.mesh, false);
   EXPECT_EQ(all_stats.big_splits, 0u);
-  // Through the spec, where it is on by default (the family's brute-force
-  // test checks the hits).
-  const BuildStats plain = make_accelerator("bvh:opt=none,big=0,bigroot=0")->build(s.mesh);
+  // Through the spec: on with the binned builder (the family's brute-force
+  // test checks the hits), off with the others.
   const BuildStats split = make_accelerator("bvh:opt=none")->build(s.mesh);
-  EXPECT_NE(plain.extra.at("sah_tree"), split.extra.at("sah_tree"));
-  EXPECT_EQ(plain.extra.at("big_splits"), 0.0);
   EXPECT_GE(split.extra.at("big_splits"), 1.0);
-  EXPECT_THROW(make_accelerator("bvh:builder=sbvh,big=0.1"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:builder=lbvh,bigroot=0.1"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:builder=sweep,bigmin=64"), SpecError);
-  EXPECT_NO_THROW(make_accelerator("bvh:builder=sbvh,big=0"));
-  EXPECT_THROW(make_accelerator("bvh:big=2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:bigmin=0"), SpecError);
+  EXPECT_EQ(make_accelerator("bvh:opt=none,builder=sweep")->build(s.mesh).extra.count("big_splits"), 0u);
 }
 
 TEST(BvhLbvh, CoincidentCentroidsGiveABalancedTree) {

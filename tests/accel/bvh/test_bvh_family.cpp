@@ -120,23 +120,20 @@ TEST(BvhFamily, ReportsSimdIsaAndStatistics) {
 }
 
 TEST(BvhFamily, RejectsBadParameters) {
-  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:block=3", "bvh:builder=octree", "bvh:layout=bvh3", "bvh:tri=mt,simd=0",
-                           "bvh:tri=mt,packet=16",
-                           "bvh:bins=1", "bvh:alpha=-1", "bvh:sbudget=9", "bvh:bleaf=0", "bvh:sbins=1", "bvh:ct=0",
-                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:opt_rounds=-1", "bvh:smin=-2", "bvh:nodes=3",
-                           "bvh:node=q16", "bvh:node=q8,packet=16", "bvh:node=q8,simd=0", "bvh:node=q8,layout=bvh4",
-                           "bvh:node=q8,layout=bvh2", "bvh:layout=bvh16,block=4", "bvh:layout=bvh16,block=16",
-                           "bvh:layout=bvh16,packet=16,block=4", "bvh:layout=bvh16,node=q8", "bvh:layout=bvh32", "bvh:owalk=2",
-                           "bvh:owalk=0,layout=bvh2", "bvh:owalk=1,node=q8", "bvh:owalk=0,simd=0", "bvh:owalk=1,block=4"})
+  for (const char* spec : {"bvh:leaf=0", "bvh:leaf=-1", "bvh:leaf=many", "bvh:builder=octree", "bvh:layout=bvh3",
+                           "bvh:tri=mt,simd=0", "bvh:tri=mt,packet=16", "bvh:bins=1", "bvh:sbudget=9", "bvh:ct=0",
+                           "bvh:opt=anneal", "bvh:leaf=500", "bvh:leaf=121", "bvh:smin=-2", "bvh:nodes=3",
+                           "bvh:layout=bvh32", "bvh:preset=best", "bvh:preset=", "bvh:bound=sphere,layout=bvh8"})
     EXPECT_THROW(make_accelerator(spec), SpecError) << spec;
   EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,tri=mt"));
   EXPECT_NO_THROW(make_accelerator("bvh:tri=mt"));
-  EXPECT_NO_THROW(make_accelerator("bvh:tri=mt,layout=bvh4,block=4"));
+  EXPECT_NO_THROW(make_accelerator("bvh:tri=mt,layout=bvh4"));
   EXPECT_NO_THROW(make_accelerator("bvh:leaf=auto"));
-  EXPECT_NO_THROW(make_accelerator("bvh:owalk=0,layout=bvh4"));
+  EXPECT_NO_THROW(make_accelerator("bvh:leaf=120"));
+  EXPECT_NO_THROW(make_accelerator("bvh:layout=bvh2,leaf=255"));
 }
 
-// tri=mt (the study option measuring what watertightness costs) tests the
+// tri=mt (the non-watertight option, measuring what watertightness costs) tests the
 // wide layouts' blocks with the vectorised Moller-Trumbore test, which
 // computes what the scalar intersect_moller_trumbore computes lane by lane
 // (its pre-division range test is conservative): the same closest hits as
@@ -155,7 +152,7 @@ TEST(BvhFamily, MollerTrumboreBlocksMatchBruteForceWithTheSameTest) {
     }
     auto brute = make_accelerator("brute:tri=mt");
     brute->build(s.mesh);
-    for (const char* spec : {"bvh:tri=mt", "bvh:tri=mt,layout=bvh4,block=4", "bvh:tri=mt,block=16",
+    for (const char* spec : {"bvh:tri=mt", "bvh:tri=mt,layout=bvh4", "bvh:tri=mt,layout=bvh16",
                              "bvh:tri=mt,opt=reinsert"}) {
       auto accel = make_accelerator(spec);
       accel->build(s.mesh);
@@ -194,7 +191,7 @@ TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
   }
   for (size_t i = 3; i < rays.size(); i += 37) rays[i].dir.y() = 0.0f;  // axis-parallel component
   for (size_t i = 7; i < rays.size(); i += 41) rays[i].tmin = -1.0f;     // tmin < 0
-  for (const char* layout : {"bvh8", "bvh4"}) {
+  for (const char* layout : {"bvh8", "bvh4", "bvh16"}) {
     auto simd = make_accelerator(fmt::format("bvh:layout={}", layout));
     auto scalar = make_accelerator(fmt::format("bvh:layout={},simd=0", layout));
     simd->build(s.mesh);
@@ -218,7 +215,6 @@ TEST(BvhFamily, ScalarTestsGiveIdenticalHitsAndCounts) {
     EXPECT_EQ(soa.nodes_visited, sob.nodes_visited) << layout;
     EXPECT_EQ(soa.triangle_tests, sob.triangle_tests) << layout;
   }
-  EXPECT_THROW(make_accelerator("bvh:simd=0,block=4"), SpecError);
   EXPECT_THROW(make_accelerator("bvh:simd=0,packet=16"), SpecError);
 }
 

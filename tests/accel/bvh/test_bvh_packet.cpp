@@ -27,7 +27,7 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   // axis-parallel, tmin < 0 and short rays mixed in, through bvh:packet=16
   // and the single-ray kernel: every field equal, and occlusion agrees. Coincident copies of a triangle
   // make exact ties, which both must give to the lowest primitive id.
-  for (const ReferenceScene& ref : reference_scenes()) {
+  for (const Reference& ref : references()) {
     test::NamedMesh s = ref.scene;
     const size_t n = s.mesh.triangles.size();
     for (size_t i = 0; i < std::min<size_t>(n, 200); ++i) s.mesh.triangles.push_back(s.mesh.triangles[i]);
@@ -55,8 +55,8 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
         {"bvh", "bvh:packet=16"},
         {"bvh:layout=bvh8", "bvh:packet=16,layout=bvh8"},
         {"bvh:layout=bvh16", "bvh:packet=16,layout=bvh16"},
-        {"bvh:block=4,leaf=4,bleaf=1", "bvh:packet=16,block=4,leaf=4,bleaf=1"},
-        {"bvh:block=16", "bvh:packet=16,block=16"}};
+        {"bvh:leaf=4,opt=reinsert", "bvh:packet=16,leaf=4,opt=reinsert"},
+        {"bvh:leaf=48", "bvh:packet=16,leaf=48"}};
     for (const auto& [single_spec, spec] : pairs) {
       auto single = make_accelerator(single_spec);
       auto packet = make_accelerator(spec);

@@ -25,8 +25,8 @@ namespace raylab {
 namespace {
 
 TEST(BvhWatertightness, ClosedSphereHasNoLeaksWithVectorisedTest) {
-  for (const char* spec : {"bvh", "bvh:block=4,leaf=8", "bvh:block=16,leaf=32", "bvh:layout=bvh4,block=8",
-                           "bvh:layout=bvh2", "bvh:builder=sbvh,alpha=0,sbudget=1", "bvh:layout=bvh16"}) {
+  for (const char* spec : {"bvh", "bvh:leaf=8", "bvh:leaf=32", "bvh:layout=bvh4", "bvh:layout=bvh2",
+                           "bvh:builder=sbvh,sbudget=1", "bvh:layout=bvh16", "bvh:preset=sbvh"}) {
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(0.3f, -0.2f, 0.1f), 8000), 0u) << spec;
     // Far from the origin the float spacing is 1/128 of the radius.
     EXPECT_EQ(test::closed_sphere_leaks(spec, Vec3f(1e5f, -2e4f, 3e4f), 8000), 0u) << spec << " far";
@@ -149,7 +149,7 @@ TEST(BvhTraversal, RaysStartingInsideAndOnBoxes) {
     m.triangles.push_back({b, b + 1, b + 2});
     m.triangles.push_back({b, b + 2, b + 3});
   }
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:block=4,leaf=1", "bvh:layout=bvh16,leaf=1"}) {
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh2", "bvh:leaf=1", "bvh:layout=bvh16,leaf=1"}) {
     auto a = make_accelerator(spec);
     a->build(m);
     for (float z0 : {0.0f, 0.5f, 2.0f, 5.0f}) {
@@ -331,16 +331,13 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
                            "bvh:builder=sbvh,opt=reinsert"}) {
     auto accel = make_accelerator(spec);
     accel->build(s.mesh);
-    auto study = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "owalk=0");
-    study->build(s.mesh);
-    std::vector<Hit> octant(n), general(n), counted(n), study_hits(n);
-    std::vector<uint8_t> occ_octant(n), occ_general(n), occ_study(n);
-    TraversalStats stats;
+    std::vector<Hit> octant(n), general(n), counted(n);
+    std::vector<uint8_t> occ_octant(n), occ_general(n), occ_counted(n);
+    TraversalStats stats, occ_stats;
     accel->intersect(grouped, octant);
     accel->intersect(grouped, counted, &stats);
     accel->occluded(grouped, occ_octant);
-    study->intersect(grouped, study_hits);
-    study->occluded(grouped, occ_study);
+    accel->occluded(grouped, occ_counted, &occ_stats);
     {
       std::vector<Hit> h(n);
       std::vector<uint8_t> o(n);
@@ -360,8 +357,7 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
           << spec << " ray " << i << ": octant walk prim " << octant[i].prim << " t " << octant[i].t
           << ", general prim " << general[i].prim << " t " << general[i].t;
       ASSERT_EQ(std::memcmp(&octant[i], &counted[i], sizeof(Hit)), 0) << spec << " ray " << i << " (counted)";
-      ASSERT_EQ(std::memcmp(&octant[i], &study_hits[i], sizeof(Hit)), 0) << spec << " ray " << i << " (owalk=0)";
-      ASSERT_EQ(occ_octant[i], occ_study[i]) << spec << " ray " << i << " (owalk=0)";
+      ASSERT_EQ(occ_octant[i], occ_counted[i]) << spec << " ray " << i << " (counted)";
       ASSERT_EQ(occ_octant[i], occ_general[i]) << spec << " ray " << i;
       ASSERT_EQ(occ_octant[i] != 0, octant[i].valid()) << spec << " ray " << i;
     }
@@ -371,13 +367,12 @@ TEST(BvhOctantWalk, CoherentBatchesGiveTheGeneralWalksAnswersBitForBit) {
 }
 
 TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
-  // bvh (ahead=1) computes each ray's box-test scalars while the ray before
-  // it walks (trace_rays_ahead) in coherent batches (octant walks, and the
-  // general walk of the specs without them); ahead=0 computes them when the
-  // ray starts, as incoherent batches always do. Every hit field and every
-  // occlusion answer must be equal, in coherent and incoherent batches, with rays
-  // that leave the fast kernel (axis-parallel, tmin < 0, invalid, an origin
-  // far beyond the scene) between ordinary ones, and as the last ray.
+  // Uncounted coherent batches compute each ray's box-test scalars while the
+  // ray before it walks (trace_rays_ahead); counted batches, and incoherent
+  // ones, compute them when the ray starts. Every hit field and every
+  // occlusion answer must be equal, in coherent and incoherent batches, with
+  // rays that leave the fast kernel (axis-parallel, tmin < 0, invalid, an
+  // origin far beyond the scene) between ordinary ones, and as the last ray.
   const test::NamedMesh s = test::soup(2000, 31);
   const Aabb box = s.mesh.bounds();
   const Vec3f centre = box.center(), half = 0.5f * (box.hi - box.lo);
@@ -402,19 +397,18 @@ TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
   }
   ASSERT_TRUE(batch_is_octant_coherent(coherent));
   ASSERT_FALSE(batch_is_octant_coherent(incoherent));
-  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:node=q8", "bvh:tri=mt", "bvh:owalk=0"}) {
+  for (const char* spec : {"bvh", "bvh:layout=bvh4", "bvh:layout=bvh16", "bvh:tri=mt", "bvh:preset=sbvh"}) {
     auto ahead = make_accelerator(spec);
     ahead->build(s.mesh);
-    auto plain = make_accelerator(std::string(spec) + (std::string(spec) == "bvh" ? ":" : ",") + "ahead=0");
-    plain->build(s.mesh);
     for (const std::vector<Ray>* rays : {&coherent, &incoherent}) {
       const size_t n = rays->size();
       std::vector<Hit> a(n), b(n);
       std::vector<uint8_t> oa(n), ob(n);
+      TraversalStats sb, sob;
       ahead->intersect(*rays, a);
-      plain->intersect(*rays, b);
+      ahead->intersect(*rays, b, &sb);
       ahead->occluded(*rays, oa);
-      plain->occluded(*rays, ob);
+      ahead->occluded(*rays, ob, &sob);
       size_t hits = 0;
       for (size_t i = 0; i < n; ++i) {
         hits += a[i].valid();
@@ -427,9 +421,7 @@ TEST(BvhAhead, ScalarsComputedAheadGiveTheSameAnswersBitForBit) {
       EXPECT_FALSE(a.back().valid());
     }
   }
-  EXPECT_THROW(make_accelerator("bvh:ahead=0,layout=bvh2"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:ahead=1,simd=0"), SpecError);
-  EXPECT_THROW(make_accelerator("bvh:ahead=2"), SpecError);
+  EXPECT_THROW(make_accelerator("bvh:ahead=0"), SpecError);
 }
 
 }  // namespace
