@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench bench-full bench-slurm-local docs report microbench clean
+.PHONY: all deps configure build test demo bench bench-full bench-slurm-local docs docs-pages report microbench clean
 
 all: build
 
@@ -60,6 +60,14 @@ docs: bench
 	sed -i -e 's|(\.\./out/bench/heatmaps/|(pictures/|' -e 's|(\.\./out/bench/structures/|(pictures/|' \
 	       -e 's|(\.\./out/bench/charts/\([^)]*\)\.svg)|(results_files/\1.png)|' docs/results.md
 	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
+	$(MAKE) docs-pages
+
+# The generated blocks of the structure pages (docs/structures/<name>.md): parameters and
+# statistics from `raylab accels --json`, numbers from docs/results.md. No study run: after a
+# parameter changes, this alone brings the pages (and the docs check of `make test`) up to date.
+docs-pages: configure
+	cmake --build $(BUILD) -j $(JOBS) --target raylab
+	/usr/bin/python3 scripts/docs.py generate --raylab $(BUILD)/raylab
 
 microbench: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab_microbench
