@@ -24,7 +24,7 @@ Runner add_rays(CLI::App& app) {
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("rays", "write a ray set (as raylab bench makes it) to a ray file");
-  // The vocabulary of verify and bench (issue 19): a positional scene,
+  // The vocabulary of verify and bench: a positional scene,
   // --ray-sets for which set, --rays for how many, -o for the output; the
   // first names (--set, --count, --out) are kept as synonyms.
   add_scene_options(cmd, o->positional_scene, o->scene, "the scene: procedural spec, scene file or mesh file");

@@ -61,7 +61,7 @@ struct SbvhOptions {
   // quarter to two thirds fewer boxes on the Sponza-based scenes, shadow rays
   // 4-46 % more, along their whole length (not only near the surfaces they
   // start on). Kept whole, such a reference goes to the side of its centroid
-  // (docs/bvh-speed.md, session 27).
+  // (measured over the interior views: docs/structures/bvh.md).
   bool split_planar = true;
 };
 

@@ -75,7 +75,7 @@ struct BvhConfig {
   TriangleTest tri = TriangleTest::Watertight;
   bool spheres = false;  // bound=sphere: the bvh2 tree with bounding spheres (traverse_sphere_bvh.h)
   int packet = 0;  // 16: closest-hit batches as 16-ray frustum packets (traverse_packet.h); bvh8 or bvh16
-  bool simd = true;  // false: wide layouts walked with scalar tests (issue 17's algorithm-only comparison)
+  bool simd = true;  // false: wide layouts walked with scalar tests (the algorithm-only comparison)
   bool quantized = false;  // node=q8: compressed 8-wide nodes (bvh8, single rays)
   bool occlusion_order = false;  // aorder=rtsah: child slots ordered for any-hit walks (occlusion_order.h)
   bool octant_walks = true;  // owalk=1: coherent batches take octant-specialised walks (traverse_wide.h)
@@ -179,8 +179,8 @@ class WideKernel final : public BatchAccelerator<WideKernel<N, W, kScalar, Node>
   // while the ray before it walks (trace_rays_ahead), and if watertight takes
   // the octant walks. Incoherent batches compute them when each ray starts:
   // their walks are long, the set-up's latency a small part of them, and the
-  // hand-over's instructions measured 1-3 % slower there (docs/bvh-speed.md,
-  // session 23). Else false: counted batches keep the shell's loop, whose
+  // hand-over's instructions measured 1-3 % slower there (Zen 3, AVX2). Else
+  // false: counted batches keep the shell's loop, whose
   // counters every structure shares, and simd=0 its scalar kernel.
   template <bool kAnyHit, typename Out>
   bool trace_uncounted(std::span<const Ray> rays, TraversalStats* stats, Out&& out) const {
@@ -548,7 +548,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // re-ranks after the last one's moves), and leaves of 3 instead of 4
         // let them move alone: +20 % on shadow rays, +6 % random, +3 %
         // diffuse over one round of 2 % on 4-triangle leaves, for a build
-        // still under Embree's (docs/bvh-speed.md, session 16). The full
+        // still under Embree's (docs/structures/bvh.md). The full
         // reinsertion is the preset (32 rounds over 15 %, at 5-35x Embree's build).
         const std::string& opt = p.str("opt");
         const bool light = opt == "light", full = opt == "reinsert";
@@ -561,7 +561,7 @@ AcceleratorInfo bvh_accelerator_info() {
         c.bins = p.integer("bins");
         // Reinsertion moves leaves whole: single-triangle leaves let it move
         // every triangle (+4 % over bleaf=4 on the interior views, all four
-        // ray sets; docs/bvh-speed.md, session 6). The collapse merges them
+        // ray sets). The collapse merges them
         // into wide leaves afterwards either way.
         c.binary_leaf = p.str("bleaf") == "auto" ? (full ? 1 : light ? 3 : 4) : p.integer("bleaf");
         c.alpha = static_cast<float>(p.real("alpha"));
@@ -581,7 +581,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // node down to its leaf; with the split, camera rays walk 7 % fewer
         // nodes and shadow rays 21 % fewer over 34 views of the interior
         // scenes; primary and diffuse rays 3-5 % faster, shadow 1-8 %, random
-        // 0-2 % (conference's shadow rays 6 % slower; docs/bvh-speed.md, session 28).
+        // 0-2 % (conference's shadow rays 6 % slower).
         c.big_node = static_cast<float>(p.real("big"));
         c.big_root = static_cast<float>(p.real("bigroot"));
         c.big_min = p.integer("bigmin");
@@ -602,8 +602,8 @@ AcceleratorInfo bvh_accelerator_info() {
         // layout=auto: 16-wide nodes where one AVX-512 instruction tests a
         // plane of all sixteen children and nothing in the spec needs 8-wide
         // ones (simd=0 follows, so that it stays the same tree with scalar
-        // tests); they beat bvh8 on every ray set of the interior views there
-        // (docs/bvh-speed.md, session 15). Elsewhere a 16-wide plane takes
+        // tests); they beat bvh8 on every ray set of the interior views on
+        // machines with AVX-512. Elsewhere a 16-wide plane takes
         // two or four instructions, and bvh8 stays the layout.
         if (l == "auto")
           c.layout = simd::isa_bits() >= 512 && !c.quantized && c.block == 8
@@ -616,7 +616,7 @@ AcceleratorInfo bvh_accelerator_info() {
         // (Sponza's shadow rays 2.3x the box tests, 0.6x the speed), and with
         // the full reinsertion, which moves such triangles apart itself (the
         // limit only adds node tests there: +5 % over the 34 views);
-        // docs/bvh-speed.md, session 30.
+        // docs/structures/bvh.md.
         c.thick_limit = p.str("thick") != "auto" ? static_cast<float>(p.real("thick"))
                         : c.layout == LayoutKind::Bvh16 && !full ? 0.4f
                                                                  : 0.0f;

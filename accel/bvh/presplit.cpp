@@ -126,7 +126,7 @@ std::vector<BuildRef> whole_triangle_refs(const TriangleMesh& mesh) {
 std::vector<BuildRef> presplit_references(const TriangleMesh& mesh, const PresplitOptions& options,
                                           PresplitStats* stats) {
   // Large fresh arrays cost page faults (a few milliseconds per ten
-  // megabytes on the machine of docs/bvh-speed.md session 24): the pass keeps
+  // megabytes on a 2-core Xeon with AVX-512): the pass keeps
   // per-triangle arrays of at most eight bytes, recomputes the triangle boxes
   // instead of storing them, and writes the references where the builder
   // takes them.

@@ -13,7 +13,7 @@
 // upper planes up). One multiply-add without rounding turns a byte back into
 // that float, and the traversal then runs the float node's conservative box
 // test on it unchanged: its robustness argument (traverse_wide.h) holds
-// because the planes it sees are floats bounding the child, as before.
+// because the planes it sees are floats bounding the child, as with float nodes.
 //
 // Unused slots decode to lo = origin + 255 cells > hi = origin on every axis
 // and hold the empty leaf reference, so a ray enters them only if it starts

@@ -334,7 +334,7 @@ TEST(Registry, CoverageSpecsAllBuildAndNameTheirStructure) {
 namespace raylab {
 namespace {
 
-// Issue 17: a structure's scalar variant (caps.scalar_variant, "simd=0")
+// A structure's scalar variant (caps.scalar_variant, "simd=0")
 // runs the same algorithm and the same triangle test without SIMD kernels,
 // so it must give exactly the same hits (distance, barycentrics, triangle),
 // the same occlusion answers and the same counted work as the default.

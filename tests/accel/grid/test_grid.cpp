@@ -1,4 +1,4 @@
-// Grids (issue 3): the resolution rule, the triangle/box overlap test, cell
+// Grids: the resolution rule, the triangle/box overlap test, cell
 // assignment, the 3D-DDA's corner cases, and grid / hashgrid / grid2 against
 // the brute-force reference on Cornell, soups, a flat scene and a teapot in a
 // stadium; memory budget and bad specs (agreement with Embree:
@@ -544,9 +544,9 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
 }
 
 TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {  // and the wide BVH
-  // Issue 17: the cell margin was sized from the absolute coordinates, so a
-  // sphere of radius 8 at 3e5 had a margin (0.6) as large as a cell and
-  // every cell listed its neighbours' triangles. Counted work, not time:
+  // A cell margin sized from the absolute coordinates would give a sphere
+  // of radius 8 at 3e5 a margin (0.6) as large as a cell, and every cell
+  // would list its neighbours' triangles. Counted work, not time:
   // the same rays (moved with the mesh) visit about as many cells and test
   // about as many triangles far away as at the origin, and all hit.
   const Vec3f offset(3e5f, 1e5f, -2e5f);
