@@ -153,10 +153,17 @@ def numbers_block(name, results_text, all_names, max_rows=12):
         if per_heading[heading] == 1:
             caption = ""  # one table in its section: the section's heading names it
         first_is_structure = any(plain(split_row(r)[0]).split(":")[0] in all_names for r in rows)
+        columns = [i for i, c in enumerate(split_row(header[0])) if i > 0 and names_structure(c, name)]
         if first_is_structure:
             mine = [r for r in rows if names_structure(split_row(r)[0], name)]
+        elif columns:
+            # The structures are the columns (a table per class or scene): its column beside the first.
+            keep = [0] + columns
+            pick = lambda line: "| " + " | ".join(split_row(line)[i] for i in keep) + " |"
+            header, mine = [pick(header[0]), pick(header[1])], [pick(r) for r in rows]
         else:
-            mine = [r for r in rows if any(names_structure(c, name) for c in split_row(r))]
+            mine = [r for r in rows if any(names_structure(c, name) or re.search(rf"`{re.escape(name)}[`:]", c)
+                                           for c in split_row(r))]
         if not mine:
             continue
         title = caption or heading or "docs/results.md"

@@ -84,6 +84,12 @@ RESULTS = """# report
 | alpha | 0.50 |
 | alpha:p1=0 | 0.25 |
 
+## Per class
+
+| class | `embree` | `alpha` |
+|---|---:|---:|
+| interiors | 1.00 | 0.40 |
+
 Machine: a test machine. Revision of the binary: abc1234.
 """
 
@@ -177,7 +183,7 @@ def main():
             page = read(root, "docs/structures/alpha.md")
             for expected in ("| `p1` | `1` | 0 or 1 | first |", "| `p2` | `auto` | auto or >= 1 | second \\| with a bar |",
                              "| `cells` | cells built |", "| alpha | 0.50 |", "| alpha:p1=0 | 0.25 |",
-                             "Revision of the binary: abc1234"):
+                             "| interiors | 0.40 |", "Revision of the binary: abc1234"):
                 if expected not in page:
                     print(f"FAIL: the generated page lacks {expected!r}:\n{page}")
                     return 1
