@@ -3,7 +3,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps configure build test demo bench bench-full bench-slurm-local study docs report microbench clean
+.PHONY: all deps configure build test demo bench bench-full bench-slurm-local study docs docs-pages report microbench clean
 
 all: build
 
@@ -79,6 +79,14 @@ docs: study
 	/usr/bin/python3 -B bench/study/page.py --out docs/results.md --assets docs/results_files/study \
 	    $(STUDY_ROOT)/*/analysis.json
 	/usr/bin/python3 scripts/update-readme-results.py README.md docs/results.md
+	$(MAKE) docs-pages
+
+# The generated blocks of the structure pages (docs/structures/<name>.md): parameters and
+# statistics from `raylab accels --json`, numbers from docs/results.md. No study run: after a
+# parameter changes, this alone brings the pages (and the docs check of `make test`) up to date.
+docs-pages: configure
+	cmake --build $(BUILD) -j $(JOBS) --target raylab
+	/usr/bin/python3 scripts/docs.py generate --raylab $(BUILD)/raylab
 
 microbench: configure
 	cmake --build $(BUILD) -j $(JOBS) --target raylab_microbench

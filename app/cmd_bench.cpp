@@ -33,7 +33,7 @@ struct Preset {
   size_t brute_max_tris;
 };
 
-// The real meshes as researchers see them (issue 12): the bunny as framed by
+// The real meshes as researchers see them: the bunny as framed by
 // its file, Sponza and the conference room from inside with lights inside
 // (scenes/shared/*.json); full adds a second Sponza view and the dragon in Sponza. Only when run from
 // the checkout with ../shared/scenes beside it (`make bench` does), else "".

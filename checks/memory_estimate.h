@@ -5,7 +5,7 @@
 // being killed by the kernel. The figures are peak resident bytes per
 // triangle above the loaded scene, declared by each structure in its registry
 // line (AcceleratorInfo::build_peak_bytes_per_triangle, accel/registry.h);
-// docs/big-scenes.md.
+// docs/scale.md.
 #include <cstddef>
 #include <string>
 

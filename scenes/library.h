@@ -1,5 +1,5 @@
 #pragma once
-// The procedural scene library (issue 8): classic and hard scenes for
+// The procedural scene library: classic and hard scenes for
 // acceleration structures, each deterministic for its parameters (and seed),
 // sized by parameters, with a default camera and light (emissive triangles
 // or a uniform sky), so `raylab render --scene NAME` gives a sensible image.

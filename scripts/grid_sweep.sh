@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Grid measurements of issue 3, one benchmark at a time, single-threaded:
+# Grid measurements, one benchmark at a time, single-threaded:
 #  1. density sweep (lambda = 1/8 .. 8) of grid, hashgrid and grid2 on
 #     bunny, sponza (interior view) and conference (interior view);
 #  2. memory at large lambda (1 .. 512): grid against hashgrid on

@@ -143,7 +143,7 @@ AcceleratorInfo bsp_accelerator_info() {
        {"tplanes", "8", "triangle planes tried per node, 0..64 (besides the dirs x events swept)", integer_in(0, 64)},
        {"diag", "polytope",
         "where the 26-DOP diagonals (dirs=7, 13) are candidates: polytope (only in regions already cut by a slanted "
-        "plane) or any (box regions too); docs/bsp-hybrid.md",
+        "plane) or any (box regions too); docs/structures/bsp.md",
         one_of({"polytope", "any"})},
        {"bins", "0", "0: every event position along each fixed direction (exact sweep); 2..64: bins - 1 binned planes",
         integer_in(2, 64).or_number(0)},

@@ -634,7 +634,7 @@ class Builder {
     // isolates the dragon in two cuts but slices the atrium's axis-aligned
     // architecture, and every region of the atrium below it is a polytope:
     // the tree's SAH cost was 143.5 with diagonals in box regions, 120.3
-    // without (the axes alone: 116.9; docs/bsp-hybrid.md). Below a triangle
+    // without (the axes alone: 116.9; docs/structures/bsp.md). Below a triangle
     // plane the region is a polytope already, and diagonals can follow it.
     const int swept = region.is_box && !opt_.diagonals_in_boxes ? std::min(opt_.directions, 3) : opt_.directions;
     for (int di = 0; di < swept; ++di) {

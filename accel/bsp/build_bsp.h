@@ -51,7 +51,7 @@
 // references then costs O(n (directions + triangle_planes)) plus
 // O(s log s) for its s straddling references and a constant number of
 // polytope clips, so O(N log N) for a balanced tree (measured in
-// docs/bsp-hybrid.md); the depth is capped like the k-d tree's
+// docs/structures/bsp.md); the depth is capped like the k-d tree's
 // (8 + 1.3 log2 N, at most 64).
 #include <cstddef>
 
@@ -65,7 +65,7 @@ struct BspBuildOptions {
   int triangle_planes = 8;   // triangle planes tried per node (0 = fixed directions only)
   // Whether the 26-DOP diagonals are candidates in box regions too (true), or
   // only in regions already cut by a slanted plane (false, the default; see
-  // find_split in build_bsp.cpp and docs/bsp-hybrid.md for why).
+  // find_split in build_bsp.cpp and docs/structures/bsp.md for why).
   bool diagonals_in_boxes = false;
   int bins = 0;              // 0: exact event sweep; 2..64: bins - 1 binned positions per direction
   float traversal_cost = 15.0f;   // K_T

@@ -142,7 +142,7 @@ struct BuildOptions {
   // and the rest the other, when they are at least one and at most a quarter
   // of the node's references. Centroid splits never separate references by
   // size, so a floor or a wall otherwise stretches the box of every node on
-  // its way down (build_binned_sah.cpp; docs/bvh-speed.md, session 28).
+  // its way down (build_binned_sah.cpp; measured in docs/structures/bvh.md).
   float big_node = 0.0f;
   float big_root = 0.0f;
   size_t big_min = 1024;

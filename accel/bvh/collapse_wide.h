@@ -42,7 +42,7 @@ struct CollapseOptions {
   // planes (the floor and a wall of a room, three walls of an alcove) has a
   // box with volume that none of its triangles' boxes has: the light-pass
   // trees of the Sponza scenes and conference held such leaves near the
-  // root, entered by up to every camera ray (docs/bvh-speed.md, session 30).
+  // root, entered by up to every camera ray (docs/structures/bvh.md).
   float thick_leaf_area = 0.0f;
   float thick_leaf_limit = 0.0f;
   const TriangleMesh* mesh = nullptr;  // the triangles the tree's prim_ids name

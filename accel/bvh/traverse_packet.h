@@ -18,7 +18,7 @@
 // packets and single rays the same way). Rays the fast kernel does not take (invalid, nearly axis-parallel,
 // tmin < 0, origin far outside the scene) are traced singly. Rays from many
 // points (shadow rays of a camera's hits) were measured slower as packets
-// than as single rays (docs/bvh-speed.md), so diffuse, shadow and random
+// than as single rays (docs/structures/bvh.md), so diffuse, shadow and random
 // sets pay only the common-origin test.
 //
 // Answers equal the single-ray walk's bit for bit: the frustum test culls a
@@ -427,11 +427,11 @@ class PacketTracer {
 
   // Subtrees entered by at most this many rays are finished ray by ray (1
   // measured 2-3 % faster than 2, and than 0, since leaves entered by few
-  // rays are tested ray by ray: docs/bvh-speed.md, session 26).
+  // rays are tested ray by ray).
   static constexpr int kSingleRayAtMost = 1;
   // Leaves entered by at most this many rays are tested ray by ray, a
   // triangle per lane (intersect_leaf_per_ray): measured against 0, 2, 6 and
-  // 8 on the five interior views' camera rays (docs/bvh-speed.md, session 26).
+  // 8 on the five interior views' camera rays.
   static constexpr int kPerRayLeafAtMost = 4;
 
   // A child as the packet walk pushes it: (parent node, slot), with the leaf

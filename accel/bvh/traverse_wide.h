@@ -126,8 +126,8 @@ inline bool ray_is_axis_parallel(const Ray& r) {
 // NaN failing every comparison. It is the prologue of every ray, so with SSE4.1
 // it is three vector comparisons on the ray's two halves and one branch
 // instead of a dozen scalar ones: on rays that leave the scene after one
-// node, the scalar checks were about a quarter of the time (docs/bvh-speed.md,
-// session 12). Rays that fail it take the checks one by one.
+// node, the scalar checks were about a quarter of the time. Rays that fail
+// it take the checks one by one.
 inline bool ray_takes_fma_kernel(const Ray& r, float limit) {
 #if defined(__SSE4_1__)
   const RayLanes l(r);
@@ -315,7 +315,7 @@ template <int N, bool kExact, int kOctant = -1>
 }
 
 // The scalar counterpart of intersect_children (`bvh:simd=0`, the
-// algorithm-only comparison of issue 17): the same tree and walk with one
+// algorithm-only comparison): the same tree and walk with one
 // child box at a time, computing lane by lane what the vector test computes
 // (the same FMA or subtract-then-multiply, the same integer-order or NaN-
 // ignoring min/max, the same padding), so hits and counted work are equal.
@@ -480,7 +480,7 @@ template <int N, bool kScalar, int W>
 // from, 2 <= k <= 8). The next node's reference comes out of registers (two
 // packed lanes, or nearest(), a reduction beside the sorting network), never
 // from a store and its reload, which sat on the path from one node to the
-// next: +5 to +6 % closest-hit Mrays/s (session 13 of docs/bvh-speed.md).
+// next: +5 to +6 % closest-hit Mrays/s.
 template <typename Nearest, typename Prefetch>
 [[gnu::always_inline]] inline uint32_t push_packed_keys(__m512i packed, uint32_t mask, Nearest&& nearest,
                                                         uint64_t*& top, Prefetch&& prefetch) {
@@ -569,8 +569,8 @@ template <int N, bool kScalar = false, typename Prefetch>
     // compare and a move; the farther key, pushed, is off that path. The
     // distances are clamped at 0 (child_key) in the vector, before the mask
     // is known. (Ordering the keys by a mask and taking the nearer's
-    // reference from the key, as before, put about ten dependent
-    // instructions and a reload of the child there: GCC 12's code, session 22.)
+    // reference from the key instead puts about ten dependent
+    // instructions and a reload of the child there in GCC 12's code.)
     max_bits(tnear, simd::vfloat<N>::broadcast(0.0f)).store(dist);
     const uint32_t i0 = simd::ctz(mask);
     const uint32_t i1 = simd::ctz(rest);
@@ -816,7 +816,7 @@ inline int ray_octant(const Ray& r) {
 // AVX2's 16 registers GCC otherwise keeps the six offsets on the stack and
 // reloads one per plane). The choice is one switch per ray, predicted in such
 // a batch; incoherent batches keep the general walk, where that switch
-// mispredicts (docs/bvh-speed.md, sessions 10 and 21).
+// mispredicts (on random rays every octant walk lost 4-6 %).
 // Coherent: the octant changes between consecutive rays at most n / 8
 // times. The scan stops at the first change past that, which incoherent
 // batches (a change at 7 rays of 8) reach within about 40 rays.

@@ -12,19 +12,19 @@
 // tree, whose triangles (the surface it leaves and its neighbours) rarely
 // occlude. Back to front starts at the far end, the light, which usually
 // lies in open space, so an occluder between is found after fewer steps.
-// Measured on the interior views (docs/fair-fight.md, section 2c): node
+// Measured on the interior views (docs/structures/kdtree.md): node
 // steps per shadow ray 25.5 -> 13.7 on sponza and 36.5 -> 13.2 on
 // dragon_in_sponza, 2-3x faster; 10 % more steps on the conference room and
 // the bunny, whose occluders lie nearer the origin, at the same speed.
 // The grids: 1.7-4.4x on the atrium views, up to 23 % slower on the bunny and
-// the conference room (docs/fair-fight.md, section 4b).
+// the conference room (docs/structures/irgrid.md).
 // Neither order wins everywhere: on the bunny (a point light above one
 // object that shadows itself) the irregular grid's shadow rays run 1.45x
 // faster front to back, on the atrium views 1.6-3x slower. `anyhit=auto`
 // measures instead of guessing: every eighth batch of occlusion rays traces
 // a few sample rays both ways with the work counted, and the batches walk in
-// the order the samples found cheaper (accel/core/batch_accelerator.h,
-// docs/fair-fight.md section 4d). The answers are the same in every order;
+// the order the samples found cheaper (accel/core/batch_accelerator.h).
+// The answers are the same in every order;
 // only the work differs.
 #include <cstddef>
 #include <cstdint>
@@ -40,7 +40,7 @@ inline ParamInfo any_hit_order_param() {
   return ParamInfo{"anyhit", "auto",
                    "order of the any-hit (occlusion) walk: back (from the segment's far end), front (front to back, "
                    "the closest-hit order) or auto (per batch, the order that costs less on sample rays); same "
-                   "answers, docs/fair-fight.md",
+                   "answers",
                    one_of({"back", "front", "auto"})};
 }
 

@@ -52,7 +52,7 @@ struct WatertightRay {
     // comparisons are coin flips, and the branches they became mispredicted
     // often enough to cost more than the rest of a short ray's setup (rays that
     // miss the root box: 45 -> 78 Mrays/s with any hit, which sets this up at
-    // the start; docs/bvh-speed.md, session 11).
+    // the start).
     const float ax = std::fabs(r.dir.x()), ay = std::fabs(r.dir.y()), az = std::fabs(r.dir.z());
     // code bit 0: ax >= ay, bit 1: ax >= az, bit 2: ay >= az; 2-bit entries
     // {2, 2, 2, 0, 1, 2, 1, 0}, ties going to the lower axis as x, then y.

@@ -2,7 +2,7 @@
 // The `simd` parameter, declared in one place for every structure with SIMD
 // kernels: simd=0 keeps the same structure and the same walk but tests with
 // scalar kernels, so a study can separate the algorithm from the engineering
-// (the registry's scalar_variant names it; docs/fair-fight.md).
+// (the registry's scalar_variant names it).
 #include <string>
 #include <string_view>
 

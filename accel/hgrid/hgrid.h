@@ -13,7 +13,7 @@
 // where it has triangles.
 //
 // Neighbourhoods (a triangle stored by its centre reaches into adjacent
-// cells), two choices, measured in docs/octrees.md:
+// cells), two choices, measured in docs/structures/hgrid.md:
 //  - neighbours=store (default): the triangle is listed in every cell of its
 //    level its (margin-enlarged) bounds overlap, at most 8 (27 when it
 //    touches cell faces within the margin); a plain 3D-DDA per level;

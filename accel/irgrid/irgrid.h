@@ -47,7 +47,7 @@ static_assert(sizeof(IrgridCell) == 32);
 
 // The cells' SIMD triangle blocks: 8 triangles per block (cells hold 25-36
 // triangles on average with the default densities, so 8 lanes are mostly
-// full; measured in docs/fair-fight.md, section 4c).
+// full; measured in docs/structures/irgrid.md).
 inline constexpr int kIrgridBlockWidth = 8;
 using IrgridTriangleBlock = TriangleBlock<kIrgridBlockWidth>;
 inline uint32_t irgrid_blocks(uint32_t count) { return triangle_blocks<kIrgridBlockWidth>(count); }

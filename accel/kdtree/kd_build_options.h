@@ -6,8 +6,8 @@ namespace raylab {
 
 // The registry's default K_T for kdtree and bsp, whose leaves are 4-wide
 // SIMD triangle blocks (kdtree_accel.cpp says why; measured in
-// docs/fair-fight.md). KdBuildOptions keeps the published constant for the
-// trees traced with scalar leaves (accel/hybrid).
+// docs/structures/kdtree.md). KdBuildOptions keeps the published constant
+// for the trees traced with scalar leaves (accel/hybrid).
 inline constexpr const char* kKdDefaultTraversalCost = "200";
 
 struct KdBuildOptions {

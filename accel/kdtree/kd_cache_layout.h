@@ -28,7 +28,7 @@
 //    left unused (about 16% more node slots).
 // Leaf entries (offsets into prim_ids) are unchanged; the tree's cells and
 // leaves are exactly the builder's (tests/accel/kdtree/test_kdtree.cpp compares them).
-// Measured (docs/fair-fight.md): 3-4% faster on the deep trees of the
+// Measured (docs/structures/kdtree.md): 3-4% faster on the deep trees of the
 // published SAH constants (ct=15), no faster on the default tree (ct=200,
 // 10x fewer nodes, which fit in the L2 cache): `layout=cluster`, not the
 // default.

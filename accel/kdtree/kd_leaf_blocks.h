@@ -9,7 +9,7 @@
 //
 // Width 4: k-d tree leaves are small (SAH leaves average 2-4 triangles with
 // the default costs), so a 4-wide block wastes fewer lanes and half the
-// memory of an 8-wide one; measured in docs/fair-fight.md.
+// memory of an 8-wide one; measured in docs/structures/kdtree.md.
 #include <cstdint>
 #include <span>
 

@@ -106,7 +106,7 @@ AcceleratorInfo kdtree_accelerator_info() {
        // SIMD leaf blocks a triangle costs a fraction of a scalar test, while
        // a node step (a dependent load and an unpredictable branch) does not
        // get cheaper; measured best of 15..300 on the interior views
-       // (docs/fair-fight.md). One tree for simd=0 and 1 (same hits and
+       // (docs/structures/kdtree.md). One tree for simd=0 and 1 (same hits and
        // counts); ct=15 is the tree tuned for the scalar test.
        sah_traversal_cost_param("builder=sah: ", kKdDefaultTraversalCost),
        sah_intersection_cost_param("builder=sah: "),
@@ -119,7 +119,7 @@ AcceleratorInfo kdtree_accelerator_info() {
        simd_param("leaves as 4-wide SIMD triangle blocks (tri=watertight)"),
        {"layout", "depth_first",
         "node order: depth_first (the builder's) or cluster (subtrees clustered into 64-byte cache lines, "
-        "kd_cache_layout.h; measured no faster with the default costs, docs/fair-fight.md)",
+        "kd_cache_layout.h; measured no faster with the default costs)",
         one_of({"depth_first", "cluster"})},
        any_hit_order_param()},
       [](const Params& p) -> std::unique_ptr<Accelerator> {

@@ -8,7 +8,7 @@
 // the same lists) gives the same hits bit for bit
 // (tests/accel/test_registry.cpp, Registry.ScalarVariantGivesIdenticalHits).
 //
-// Width 4: measured against 8 on Sponza and the stadium (docs/octrees.md);
+// Width 4: measured against 8 on Sponza and the stadium (docs/structures/octree.md);
 // most octree leaves hold 1-8 triangles, so wider blocks mostly test padding.
 #include <cstdint>
 #include <vector>

@@ -39,7 +39,7 @@
 // triangles per vector test; `simd=0` (and tri=mt) test the same lists one
 // triangle at a time. Neither uses a mailbox: a triangle listed in several
 // leaves the ray crosses is tested in each, which on Sponza and the stadium
-// cost less than the per-triangle lookups (docs/octrees.md), and it keeps
+// cost less than the per-triangle lookups (docs/structures/octree.md), and it keeps
 // the scalar variant's counted work equal to the blocks'.
 #include <algorithm>
 #include <cmath>

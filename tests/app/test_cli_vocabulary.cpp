@@ -1,4 +1,4 @@
-// issue 19: one command-line vocabulary across subcommands, accurate error
+// One command-line vocabulary across subcommands, accurate error
 // messages, image outputs, and interruption with kept records. Each test
 // pins one rule that the command line broke before.
 #include <gmock/gmock.h>

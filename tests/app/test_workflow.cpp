@@ -163,7 +163,7 @@ TEST(Workflow, SnakefilePlansTheQuickPreset) {
   EXPECT_THAT(r.output, HasSubstr("bench_cell 84 2 2"));
   EXPECT_THAT(r.output, HasSubstr("scaling_cell 44 2 2"));
   EXPECT_THAT(r.output, HasSubstr("merge_bench 1 1 1"));
-  // The pictures and the page (issue 18) are part of the study...
+  // The pictures and the page are part of the study...
   for (const char* rule : {"heatmaps 1 ", "structures 1 ", "report 1 ", "charts 1 "})
     EXPECT_THAT(r.output, HasSubstr(rule)) << rule;
   // ...and every file the workflow writes is under its output directory: `make bench`

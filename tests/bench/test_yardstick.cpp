@@ -1,4 +1,4 @@
-// The honest yardstick (issue 12): Embree's modes answer like single-ray
+// The honest yardstick: Embree's modes answer like single-ray
 // Embree, the adapter answers bit-identically to a plain rtcIntersect1 loop,
 // the prepare step changes no answer, best-Embree ratios in bench records,
 // the ray file's round trip and its bad-input errors.

@@ -59,7 +59,7 @@ TEST(SceneImport, FilesWithoutMaterialsGetDefaultGreyAndASky) {
   EXPECT_EQ(m.albedo.x(), m.albedo.y());
   EXPECT_EQ(m.albedo.y(), m.albedo.z());
   EXPECT_FALSE(m.is_emissive());
-  // Lit by a dim sky and a key light (issue 19: a white sky alone washed grey objects out).
+  // Lit by a dim sky and a key light (a white sky alone washes grey objects out).
   EXPECT_EQ(s.background, Vec3f::Constant(0.3f));
   EXPECT_GT(s.key_light.minCoeff(), 0.0f);
 }

@@ -232,7 +232,7 @@ struct Cursor {
 
 // Jumps only from cells of clearance d >= kMinClearance (a cube 5 cells
 // across or more): a jump costs about as much as two or three steps (3, 2
-// and 4 measured alike on bunny, sponza and conference, docs/fair-fight.md).
+// and 4 measured alike on bunny, sponza and conference).
 inline constexpr int kMinClearance = 3;
 
 template <bool kSkip, typename Clearance, typename Visit>

@@ -67,9 +67,9 @@ struct DdaGrid {
 // size. So the test's rounding moves a triangle by a few ulps of the
 // distance between the ray's origin and the triangle (the k-d tree's margin
 // uses the same bound, traverse_kdtree.h), whatever the absolute
-// coordinates are. Sizing it from the coordinates (as before) made a mesh of
-// size 2 at 3e5 get a margin of 0.6, larger than the mesh: every cell held
-// every triangle and verify ran 1000x slower than at the origin (issue 17).
+// coordinates are. Sized from the coordinates instead, a mesh of size 2 at
+// 3e5 would get a margin of 0.6, larger than the mesh: every cell would hold
+// every triangle (test GridAccel.MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin).
 //
 // The scale S is the smaller of the grid's largest coordinate (the old
 // bound, still right near the origin) and kOriginReach times its largest

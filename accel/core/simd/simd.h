@@ -376,7 +376,7 @@ struct vfloat<8> {
 // Sixteen lanes as two AVX2 halves (lanes 0..7 and 8..15), for the 16-ray
 // packets (traverse_packet.h) and the 16-wide layouts on AVX2 machines. The
 // portable array form had them compiled as scalar loops: `bvh:packet=16` ran
-// at half the single-ray speed on a Zen 3 (docs/bvh-speed.md, session 19).
+// at half the single-ray speed on a Zen 3.
 // Every operation is the 8-lane one on each half; masks are lo | hi << 8.
 template <>
 struct vfloat<16> {

@@ -136,9 +136,9 @@ TEST(GridAccel, TwoLevelGridStaysUsableInTheStadium) {
 }
 
 TEST(GridAccel, MeshFarFromTheOriginCostsWhatItCostsAtTheOrigin) {  // and the wide BVH
-  // Issue 17: the cell margin was sized from the absolute coordinates, so a
-  // sphere of radius 8 at 3e5 had a margin (0.6) as large as a cell and
-  // every cell listed its neighbours' triangles. Counted work, not time:
+  // A cell margin sized from the absolute coordinates would give a sphere
+  // of radius 8 at 3e5 a margin (0.6) as large as a cell, and every cell
+  // would list its neighbours' triangles. Counted work, not time:
   // the same rays (moved with the mesh) visit about as many cells and test
   // about as many triangles far away as at the origin, and all hit.
   const Vec3f offset(3e5f, 1e5f, -2e5f);

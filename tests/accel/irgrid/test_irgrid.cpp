@@ -1,4 +1,4 @@
-// The irregular grid (issue 17 item 3): bit-exact agreement with brute force
+// The irregular grid: bit-exact agreement with brute force
 // with and without the merge and expand passes, on rays along cell faces,
 // rays starting inside and rays with +-0 direction components; the passes'
 // effect on the teapot in a stadium; bad parameters; the outline.
