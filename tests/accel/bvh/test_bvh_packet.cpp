@@ -27,7 +27,7 @@ TEST(BvhPacket, SameAnswersAsSingleRaysBitForBit) {
   // axis-parallel, tmin < 0 and short rays mixed in, through bvh:packet=16
   // and the single-ray kernel: every field equal, and occlusion agrees. Coincident copies of a triangle
   // make exact ties, which both must give to the lowest primitive id.
-  for (const Reference& ref : references()) {
+  for (const ReferenceScene& ref : reference_scenes()) {
     test::NamedMesh s = ref.scene;
     const size_t n = s.mesh.triangles.size();
     for (size_t i = 0; i < std::min<size_t>(n, 200); ++i) s.mesh.triangles.push_back(s.mesh.triangles[i]);
