@@ -129,7 +129,7 @@ void require_reference(MemoryGuard& guard, const std::string& reference, const T
   if (guard.fits(step)) return;
   Spec compact = Spec::parse(reference);
   if (!compact.params.count("compact")) {
-    compact.params.insert_or_assign("compact", "1");
+    compact.params["compact"] = std::string("1");
     const MemoryStep smaller = reference_step(compact.to_string(), mesh, rays);
     if (smaller.bytes < step.bytes)
       step.instead = fmt::format("--reference {} (~{})", compact.to_string(), format_bytes(static_cast<double>(smaller.bytes)));
