@@ -10,7 +10,7 @@ Inputs (each optional; a chart whose inputs are missing is skipped with a note):
   --stress FILE    `raylab stress` records (optional): watertight leaks per accelerator
   --sweep FILE     `raylab bench --sweep` records (repeatable): grid density, kd-tree cost, BVH leaf size
   --scaling FILE   `raylab bench --scale` records: time per ray and build time against triangles
-  --render FILE    `raylab render --json` records (repeatable) for the equal-time chart; the
+  --render FILE    `raylab render --timings` records (repeatable) for the equal-time chart; the
                    record whose image name contains "reference" is the reference image
 --dir DIR reads DIR/bench.json, DIR/verify*.json, DIR/stress*.json, DIR/sweep_*.json,
 DIR/scaling.json and DIR/equal_time/*.json. Charts go to --out (default: DIR/charts or

@@ -1,5 +1,7 @@
 #include "checks/memory_estimate.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "accel/registry.h"
@@ -13,13 +15,13 @@ double build_peak_bytes_per_triangle(const std::string& accel_spec) {
   // a declared variant (grid:simd=0, embree:compact=1) gets its figure.
   const size_t colon = accel_spec.find(':');
   const std::string name = accel_spec.substr(0, colon);
-  const std::string params = colon == std::string::npos ? "," : "," + accel_spec.substr(colon + 1) + ",";
+  const std::string params = colon == std::string::npos ? std::string(",") : fmt::format(",{},", accel_spec.substr(colon + 1));
   auto has_all = [&](const std::string& variant) {
     if (variant.empty()) return false;
     size_t from = 0;
     while (from <= variant.size()) {
       const size_t comma = std::min(variant.find(',', from), variant.size());
-      if (params.find("," + variant.substr(from, comma - from) + ",") == std::string::npos) return false;
+      if (params.find(fmt::format(",{},", variant.substr(from, comma - from))) == std::string::npos) return false;
       from = comma + 1;
     }
     return true;

@@ -62,7 +62,7 @@ TEST(BenchEmbreeIsa, TheCapIsNamedAndUnknownNamesAreRefused) {
   const auto dir = test::temp_dir("bench_embree_isa");
   const std::string args = std::string(RAYLAB_BINARY) +
                            " bench --scene soup:n=300 --accel embree,bvh --ray-sets primary --size 16x16 --repeats 1 "
-                           "--threads 1 --quiet --json ";
+                           "--threads 1 --quiet -o ";
   const auto capped = test::run_shell("RAYLAB_EMBREE_ISA=sse2 " + args + (dir / "sse2.json").string() + " 2>&1");
   ASSERT_EQ(capped.exit_code, 0) << capped.output;
   const auto j = read_json(dir / "sse2.json");

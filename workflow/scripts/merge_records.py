@@ -3,7 +3,7 @@
 
   merge_records.py --out OUT.json [--preset NAME] CELL.json...
 
-Each CELL.json is a `raylab bench --json` report (header fields, "options", "records", and
+Each CELL.json is a `raylab bench -o` report (header fields, "options", "records", and
 "skipped" when a structure did not fit), with its CSV next to it (CELL.csv). OUT.json gets the
 first cell's header (machine, Embree, revision), the union of the cells' options, "complete" only
 if every cell completed, the records in the order one run writes them (scene, accelerator,

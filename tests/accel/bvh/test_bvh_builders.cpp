@@ -17,7 +17,6 @@
 #include "accel/bvh/build_binned_sah.h"
 #include "accel/bvh/build_lbvh.h"
 #include "accel/bvh/build_sbvh.h"
-#include "accel/bvh/presplit.h"
 #include "accel/bvh/sah_binning.h"
 #include "accel/bvh/small_sweep.h"
 #include "accel/registry.h"

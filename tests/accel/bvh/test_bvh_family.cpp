@@ -34,15 +34,11 @@ std::vector<std::string> family_specs() {
     for (const char* l : {"bvh2", "bvh4", "bvh8"}) specs.push_back(fmt::format("bvh:builder={},layout={}", b, l));
   for (const char* extra :
        {"bvh:opt=reinsert,layout=bvh2", "bvh:opt=reinsert,layout=bvh8", "bvh:opt=reinsert,builder=sbvh,layout=bvh4",
-        "bvh:block=4,leaf=4,bleaf=1", "bvh:block=8,leaf=8", "bvh:block=16,leaf=48", "bvh:layout=bvh4,block=16",
-        "bvh:builder=sbvh,alpha=0,sbudget=2,sbins=16", "bvh:builder=sbvh,smin=64,sbins=8",
-        "bvh:builder=sbvh,alpha=0,sflat=0", "bvh:layout=bvh2,leaf=1",
-        "bvh:ct=4,ci=0.5", "bvh:bins=4", "bvh:node=q8", "bvh:node=q8,opt=reinsert,block=16,leaf=32",
+        "bvh:leaf=8", "bvh:leaf=48", "bvh:leaf=4,opt=reinsert", "bvh:builder=sbvh,sbudget=2",
+        "bvh:builder=sbvh,smin=64", "bvh:layout=bvh2,leaf=1", "bvh:ct=4,ci=0.5", "bvh:bins=4",
         "bvh:layout=bvh16", "bvh:layout=bvh16,opt=reinsert", "bvh:layout=bvh16,builder=sbvh,leaf=4",
         "bvh:layout=bvh16,builder=lbvh", "bvh:layout=bvh8,simd=0", "bvh:layout=bvh16,simd=0",
-        "bvh:aorder=rtsah", "bvh:aorder=rtsah,layout=bvh8,opt=reinsert", "bvh:presplit=0.5",
-        "bvh:presplit=2,layout=bvh16,opt=reinsert", "bvh:presplit=0.3,layout=bvh2,opt=none",
-        "bvh:big=0.05,bigroot=0.02,bigmin=32", "bvh:big=0.2,bigmin=16,layout=bvh8,opt=reinsert"})
+        "bvh:preset=fast", "bvh:preset=quality", "bvh:preset=sbvh", "bvh:preset=sbvh,layout=bvh16"})
     specs.push_back(extra);
   return specs;
 }
