@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The long correctness check's records (scripts/long-check.sh) as one CSV row per record and a
-table per structure: rays, raylab wrong, Embree wrong, ties, leaks (docs/correctness.md).
+table per structure: rays, raylab wrong, Embree wrong, ties, leaks (docs/method.md, "The long check").
 
   scripts/long_check_summary.py out/long-check --csv out/long-check/summary.csv --md out/long-check/summary.md
   scripts/long_check_summary.py --from-csv docs/correctness.csv --md table.md   # the table from the CSV alone

@@ -50,7 +50,7 @@ def provenance(a):
     jobs = a.get("jobs") or {}
     when = (m.get("date") or "")[:10]
     t = (f"Machine: {m.get('cpu')} ({m.get('hardware_threads')} hardware threads, shared with other builds: timings "
-         f"are noisy, ratios are to Embree timed back to back in the same process). ISA: {isa_text(a)}. "
+         f"are noisy, ratios are to Embree timed in alternation in the same process). ISA: {isa_text(a)}. "
          f"Embree {m.get('embree')}. Compiler: {m.get('compiler')}; flags: {m.get('flags')}. Binary revision: "
          f"{m.get('revision')}. Run: {m.get('date')}, study preset {a.get('preset')}, `{COMMAND}`")
     if jobs.get("jobs"):
@@ -252,7 +252,9 @@ def page(analyses, charts):
     hl = ("<!-- headline:begin -->\n"
           + main["bes_sentence"] + "\n\n"
           + f"The fastest structure per scene class (speed relative to Embree, geometric mean over the class's scenes "
-          f"and ray sets, one thread; {isa_text(main)}):\n\n" + class_table(main) + "\n\n"
+          f"and ray sets, one thread; {isa_text(main)}):\n\n"
+          + f"![speed relative to Embree per class]({link(charts, main, 'per_class')})\n\n"
+          + class_table(main) + "\n\n"
           + provenance(main) + "\n<!-- headline:end -->")
     parts = [
         "# Results: the study",

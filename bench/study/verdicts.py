@@ -1,7 +1,7 @@
 """The study's verdicts: the fastest structure per scene and ray set, per scene class, over the SPD
 suite (Havran's "best efficiency scheme"), and the failure map.
 
-Speed is the ratio to single-ray Embree timed back to back in the same run (ratio_to_embree).
+Speed is the ratio to single-ray Embree timed in alternation in the same run (ratio_to_embree).
 The noise of a cell is the range of its repeats: [ratio * slowest / median, ratio * fastest /
 median]. A winner's margin over the runner-up is inside the noise when the two ranges overlap
 (the winner's slowest repeat is no faster than the runner-up's fastest). Over a class the

@@ -77,7 +77,8 @@ TEST(BvhConfig, PresetsAreDeclaredValuesThatAGivenParameterOverrides) {
     names.insert(pr.name);
     const Spec explicit_spec = Spec::parse(std::string("bvh") + (*pr.params ? ":" : "") + pr.params);
     for (const auto& [key, value] : explicit_spec.params) {
-      const auto it = std::find_if(declared.begin(), declared.end(), [&](const ParamInfo& p) { return p.name == key; });
+      const std::string& name = key;  // (clang 14 does not capture structured bindings)
+      const auto it = std::find_if(declared.begin(), declared.end(), [&](const ParamInfo& p) { return p.name == name; });
       ASSERT_NE(it, declared.end()) << pr.name << ": " << key;
       EXPECT_TRUE(it->check.accepts(value)) << pr.name << ": " << key << "=" << value;
     }
