@@ -40,9 +40,13 @@ class TruthCache {
     for (uint32_t i : ids)
       if (!known_[i]) todo.push_back(i);
     auto stopped = [&] { return stop && stop->load(); };
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-      if (stopped()) return;
-      for (size_t k = r.begin(); k < r.end(); ++k) truth_[todo[k]] = oracle_closest_hit(mesh_, rays_[todo[k]]);
+    // The stop flag is polled before every ray: on a large scene one oracle
+    // call tests every triangle (exactly where double precision cannot decide).
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        if (stopped()) return;
+        truth_[todo[k]] = oracle_closest_hit(mesh_, rays_[todo[k]]);
+      }
     });
     if (stopped()) return;
     for (uint32_t i : todo) known_[i] = 1;
