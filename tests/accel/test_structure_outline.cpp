@@ -42,7 +42,7 @@ TEST(StructureOutline, BudgetStopsAndMarksTruncated) {
   StructureOutline out;
   out.budget = 2;
   EXPECT_TRUE(out.add(OutlineBox{}));
-  EXPECT_TRUE(out.add(OutlineSegment{}));
+  EXPECT_TRUE(out.add(OutlineSegment{Vec3f::Zero(), Vec3f::UnitX(), 0}));
   EXPECT_FALSE(out.add(OutlineQuad{}));
   EXPECT_EQ(out.size(), 2u);
   EXPECT_TRUE(out.truncated);

@@ -212,7 +212,9 @@ TEST(Workflow, SnakefilePlansTheStudy) {
     EXPECT_THAT(r.output, HasSubstr(scene)) << scene;
   EXPECT_THAT(r.output, HasSubstr("--accel 'embree,bvh,kdtree,bsp,octree,loose_octree,grid,hashgrid,grid2,hgrid,irgrid,"
                                   "hybrid,embree:robust=1,bvh:tri=mt' --threads 1"));
-  if (!test::have_shared_scenes()) EXPECT_THAT(r.output, HasSubstr("study: scene balls skipped"));
+  if (!test::have_shared_scenes()) {
+    EXPECT_THAT(r.output, HasSubstr("study: scene balls skipped"));
+  }
   EXPECT_GT(outputs_under(r.output, dir), 8u);
   fs::remove_all(dir);
 }
