@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The long correctness check (docs/method.md): every registered structure's default and     
+# The long correctness check (docs/method.md): every registered structure's default and
 # its scalar variant (simd=0 where it has one) judged by the exact oracle on at least 10^7
 # rays each, with raylab verify (camera, diffuse, shadow and random rays over the interior
 # views of scenes/shared, the Cornell box far from the origin, the needles and two scanned
