@@ -301,6 +301,60 @@ OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double gr
   return best;
 }
 
+double watertight_distance_error(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray) {
+  constexpr double u = 0x1p-24;  // float's unit roundoff
+  const Vec3d o = ray.org.cast<double>(), d = ray.dir.cast<double>();
+  // The kernel's frame: kz the dominant axis (which of two equal axes does not
+  // change the bound's order), the shear S = d_kx / d_kz, d_ky / d_kz.
+  int kz = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(d[k]) > std::fabs(d[kz])) kz = k;
+  const int kx = (kz + 1) % 3, ky = (kz + 2) % 3;
+  if (d[kz] == 0.0) return std::numeric_limits<double>::infinity();
+  const double sz = 1.0 / d[kz], sx = d[kx] * sz, sy = d[ky] * sz;
+  // Translated vertices (exact in double for float inputs of similar scale),
+  // their sheared 2D coordinates and each coordinate's error: the
+  // translation's rounding (u |a|), the fma's (u |X|) and the shear factor's
+  // (two roundings, 2u |S a_z|).
+  struct P2 {
+    double x, y, z, ex, ey, ez;
+  };
+  auto shear = [&](const Vec3f& p) {
+    const Vec3d a = p.cast<double>() - o;
+    P2 q;
+    q.x = a[kx] - sx * a[kz];
+    q.y = a[ky] - sy * a[kz];
+    q.z = a[kz];
+    q.ex = u * (std::fabs(q.x) + std::fabs(a[kx]) + 3.0 * std::fabs(sx * a[kz]));
+    q.ey = u * (std::fabs(q.y) + std::fabs(a[ky]) + 3.0 * std::fabs(sy * a[kz]));
+    q.ez = u * std::fabs(a[kz]);
+    return q;
+  };
+  const P2 A = shear(p0), B = shear(p1), C = shear(p2);
+  // Edge function e = q.x r.y - q.y r.x: the inputs' errors times the other
+  // factors, a rounding per product and one for the difference.
+  auto edge = [&](const P2& q, const P2& r, double& err) {
+    const double m1 = q.x * r.y, m2 = q.y * r.x, e = m1 - m2;
+    err = std::fabs(r.y) * q.ex + std::fabs(q.x) * r.ey + std::fabs(r.x) * q.ey + std::fabs(q.y) * r.ex +
+          u * (std::fabs(m1) + std::fabs(m2) + std::fabs(e));
+    return e;
+  };
+  double eu, ev, ew;
+  const double U = edge(C, B, eu), V = edge(A, C, ev), W = edge(B, A, ew);
+  const double det = U + V + W;
+  const double edet = eu + ev + ew + 2.0 * u * (std::fabs(U) + std::fabs(V) + std::fabs(W));
+  const double T = U * A.z + V * B.z + W * C.z;
+  const double eT = std::fabs(A.z) * eu + std::fabs(B.z) * ev + std::fabs(C.z) * ew +
+                    std::fabs(U) * A.ez + std::fabs(V) * B.ez + std::fabs(W) * C.ez +
+                    3.0 * u * (std::fabs(U * A.z) + std::fabs(V * B.z) + std::fabs(W * C.z));
+  if (!(std::fabs(det) > 2.0 * edet) || T == 0.0) return std::numeric_limits<double>::infinity();
+  const double t = sz * T / det;
+  // Relative errors add: T's, det's, and the roundings of sz, the product
+  // with sz, the reciprocal of det and the final product.
+  const double rel = eT / std::fabs(T) + edet / std::fabs(det) + 4.0 * u;
+  return 2.0 * std::fabs(t) * rel;
+}
+
 bool same_distance(double a, double b, double tol) {
   return std::fabs(a - b) <= tol * std::max({std::fabs(a), std::fabs(b), 1e-30});
 }
@@ -315,8 +369,16 @@ Verdict oracle_judge(const TriangleMesh& mesh, const Ray& ray, const Hit& hit, c
   if (hit.prim >= mesh.num_triangles()) return Verdict::Wrong;
   const OracleTriangle p = oracle_triangle(mesh, ray, hit.prim);
   if (p.crosses) {
-    // A crossing triangle; right if it is (one of) the nearest.
+    // A crossing triangle; right if it is (one of) the nearest, or nearer
+    // than float arithmetic can tell apart.
     if (truth.valid && same_distance(p.t, truth.t, tie_tol)) return Verdict::Tie;
+    if (truth.valid) {
+      const double err = watertight_distance_error(mesh.vertex(hit.prim, 0), mesh.vertex(hit.prim, 1),
+                                                   mesh.vertex(hit.prim, 2), ray) +
+                         watertight_distance_error(mesh.vertex(truth.prim, 0), mesh.vertex(truth.prim, 1),
+                                                   mesh.vertex(truth.prim, 2), ray);
+      if (std::fabs(p.t - truth.t) <= err) return Verdict::Tie;
+    }
     return truth.grazing ? Verdict::Tie : Verdict::Wrong;
   }
   // Not crossed exactly: a tie only if it is a near miss (edge or range) or in plane.
