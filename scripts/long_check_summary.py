@@ -13,7 +13,15 @@ import os
 import sys
 
 COLUMNS = ["check", "scene", "ray_set", "accel", "rays", "hit_miss_disagree", "prim_disagree", "ties",
-           "raylab_wrong", "embree_wrong", "occlusion_disagree", "leak_rays", "leaks", "status"]
+           "raylab_wrong", "embree_wrong", "occlusion_disagree", "leak_rays", "leaks", "status",
+           "revision", "date", "cpu", "threads", "kernel_isa", "embree", "compiler"]
+
+
+def report_provenance(report):
+    """The columns every row of a report shares: the binary's revision, when and where it ran."""
+    return {"revision": report.get("revision", ""), "date": report.get("date", ""), "cpu": report.get("cpu", ""),
+            "threads": report.get("hardware_threads", ""), "kernel_isa": report.get("bvh_isa", ""),
+            "embree": report.get("embree", ""), "compiler": report.get("compiler", "")}
 
 
 def rows_from_records(out):
@@ -25,6 +33,7 @@ def rows_from_records(out):
         with open(path) as f:
             report = json.load(f)
         check = "verify" if os.sep + "verify" + os.sep in path else "stress"
+        prov = report_provenance(report)
         for r in report.get("records", []):
             if check == "stress" and not r.get("counts_for_exit", True):
                 continue  # Embree's and the tri=mt rows: shown by raylab stress, not structures under check
@@ -33,12 +42,12 @@ def rows_from_records(out):
                          "prim_disagree": r["prim_disagree"], "ties": r["ties"], "raylab_wrong": r["raylab_wrong"],
                          "embree_wrong": r["embree_wrong"], "occlusion_disagree": r["occlusion_disagree"],
                          "leak_rays": r.get("leak_rays", 0), "leaks": r.get("leaks", 0),
-                         "status": r.get("status", "ok" if r.get("ok", True) else "wrong")})
+                         "status": r.get("status", "ok" if r.get("ok", True) else "wrong"), **prov})
         for s in report.get("skipped", []):
             rows.append({"check": check, "scene": s["scene"], "ray_set": "", "accel": s["accel"], "rays": 0,
                          "hit_miss_disagree": 0, "prim_disagree": 0, "ties": 0, "raylab_wrong": 0,
                          "embree_wrong": 0, "occlusion_disagree": 0, "leak_rays": 0, "leaks": 0,
-                         "status": "skipped: " + s["reason"]})
+                         "status": "skipped: " + s["reason"], **prov})
     return rows
 
 
@@ -70,6 +79,19 @@ def markdown(table):
                      f"{t['raylab_wrong']} | {t['embree_wrong']} | {t['ties']:,} | {t['occlusion_disagree']} | "
                      f"{t['leaks']} ({t['leak_rays']:,}) |")
     return "\n".join(lines) + "\n"
+
+
+def provenance(rows):
+    """One line naming where and when the rows were produced: machine, ISA, compiler, revisions, dates."""
+    def values(key):
+        return sorted({str(r.get(key, "")) for r in rows if r.get(key)})
+    dates = sorted(d[:10] for d in values("date"))
+    when = dates[0] if dates and dates[0] == dates[-1] else (f"{dates[0]} to {dates[-1]}" if dates else "unknown dates")
+    revs = values("revision")
+    return (f"Long check: {', '.join(values('cpu')) or 'unknown CPU'} ({', '.join(values('threads')) or '?'} hardware "
+            f"threads), kernels {', '.join(values('kernel_isa')).upper() or '?'}, Embree {', '.join(values('embree')) or '?'}, "
+            f"{', '.join(values('compiler')) or 'unknown compiler'}, revision{'s' if len(revs) > 1 else ''} "
+            f"{', '.join(revs) or 'unknown'}, {when}; `scripts/long-check.sh` (docs/method.md).")
 
 
 def main():

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # AddressSanitizer + UndefinedBehaviorSanitizer build of the test suite
-# (CMake option RAYLAB_SANITIZE: -O1 -g1), run through ctest. Any sanitizer
+# (CMake option RAYLAB_SANITIZE: -O2 -g1), run through ctest. Any sanitizer
 # report fails the run (UB reports are fatal: -fno-sanitize-recover). Called by
 # .ci/run after `make test`. Built with clang: on a 2-core Zen 3 it compiles the
-# instrumented wide-BVH kernels in half g++'s time at -O1. Not shared with
+# instrumented wide-BVH kernels in half g++'s time. Not shared with
 # scripts/fuzz.sh's build: the fuzzer's coverage hooks would slow the suite
 # 2.3x, more than compiling the libraries twice costs.
 # Usage: scripts/sanitize.sh [BUILD_DIR]

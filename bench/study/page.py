@@ -3,6 +3,7 @@
 
   page.py --out out/study/results.md out/study/native/analysis.json [other ISA's analysis.json...]
   page.py --out docs/results.md --assets docs/results_files/study out/study/*/analysis.json   (make docs)
+  ... --long-check docs/correctness.csv    adds the long check's table (scripts/long-check.sh)
 
 The first analysis tagged `native` (else the first given) is the page's answer; every other one
 gets a section comparing its ISA. Charts are linked where the analyses keep them, or copied
@@ -16,6 +17,8 @@ import shutil
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# scripts/long_check_summary.py: the long check's table (--long-check).
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 
 from records import geomean  # noqa: E402
 
@@ -213,6 +216,20 @@ def section_accuracy(a, charts):
                     ["---", "---:", "---:", "---:", "---:", "---:"]))
 
 
+def section_long_check(rows):
+    """The long check's table per structure (scripts/long_check_summary.py) from its CSV."""
+    if not rows:
+        return None
+    import long_check_summary as lcs
+    return ("## Ten million rays per structure: the long check\n\nEvery registered structure's default and its "
+            "scalar variant judged by the exact oracle on more than 10^7 rays each (`raylab verify --judge-ties`: "
+            "camera, diffuse, shadow and random rays over the interior views, the Cornell box 1e5 and 1e7 from the "
+            "origin, the needles and two scanned meshes; `raylab stress` for leaks), from `docs/correctness.csv`. "
+            "`raylab wrong` and `Embree wrong` are the oracle's verdicts on every disagreement; `ties` are "
+            "disagreements where float arithmetic may answer either way (docs/method.md).\n\n"
+            + lcs.markdown(lcs.per_structure(rows)) + "\n" + lcs.provenance(rows))
+
+
 def common_cell_means(runs):
     """Per run, each structure's geometric mean ratio to Embree over the cells every run has."""
     keys = None
@@ -247,7 +264,7 @@ def section_isas(main, others):
     return out
 
 
-def page(analyses, charts):
+def page(analyses, charts, long_check_rows=None):
     main, others = analyses[0], analyses[1:]
     hl = ("<!-- headline:begin -->\n"
           + main["bes_sentence"] + "\n\n"
@@ -265,21 +282,31 @@ def page(analyses, charts):
         hl,
         section_suite(main), section_per_scene(main), section_per_class(main, charts), section_bes(main),
         section_counts(main), section_model(main, charts), section_failures(main), section_accuracy(main, charts),
+        section_long_check(long_check_rows),
         section_isas(main, others),
         "## Reproduce\n\n```sh\nmake study && make docs                      # quick preset, out/study/native/\n"
         "make study STUDY_PRESET=full                  # out/study-full/native/ (hours)\n"
         "snakemake -s workflow/Snakefile study --profile workflow/profiles/slurm --config study_preset=full\n"
         "make study STUDY_MARCH=x86-64-v3 STUDY_EMBREE_ISA=avx2   # another ISA: out/study/x86-64-v3/\n```",
     ]
-    return "\n\n".join(parts) + "\n"
+    return "\n\n".join(p for p in parts if p) + "\n"
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True)
     ap.add_argument("--assets", help="copy the charts here (one folder per ISA tag) and link them there")
+    ap.add_argument("--long-check", help="the long check's CSV (docs/correctness.csv): its table per structure")
     ap.add_argument("analyses", nargs="+")
     a = ap.parse_args()
+    long_check_rows = None
+    if a.long_check:
+        if not os.path.isfile(a.long_check):
+            print(f"page: {a.long_check}: no such file", file=sys.stderr)
+            return 2
+        import csv
+        with open(a.long_check) as f:
+            long_check_rows = list(csv.DictReader(f))
     runs = []
     for p in a.analyses:
         if not os.path.isfile(p):
@@ -302,7 +329,7 @@ def main():
             charts[r["tag"]] = os.path.relpath(os.path.abspath(dst), out_dir)
         else:
             charts[r["tag"]] = os.path.relpath(src, out_dir)
-    text = page(runs, charts)
+    text = page(runs, charts, long_check_rows)
     tmp = a.out + ".tmp"
     with open(tmp, "w") as f:
         f.write(text)

@@ -47,6 +47,28 @@ class PageTest(unittest.TestCase):
         self.assertIn("over the 6 scene and ray set cells every build ran", text)
         self.assertIn("x86-64-v2 (kernels SSE2, Embree SSE4.2)", text)
 
+    def test_long_check_section_sums_the_rows_per_structure_and_names_its_run(self):
+        a = analyse.analyse(spd_study(), os.path.join(self.dir, "charts"))
+        prov = {"revision": "abc1234", "date": "2026-12-08T01:00:00Z", "cpu": "AMD EPYC", "threads": "2",
+                "kernel_isa": "avx2", "embree": "3.13.5 AVX2", "compiler": "g++ 12.2.0"}
+
+        def row(accel, scene, rays, wrong=0, ties=0, check="verify", leaks=0):
+            return {"check": check, "scene": scene, "ray_set": "primary", "accel": accel, "rays": str(rays),
+                    "hit_miss_disagree": "0", "prim_disagree": "0", "ties": str(ties), "raylab_wrong": str(wrong),
+                    "embree_wrong": "0", "occlusion_disagree": "0", "leaks": str(leaks),
+                    "leak_rays": "100" if check == "stress" else "0",
+                    "status": "ok", **prov}
+        rows = [row("bvh", "needles", 6000000, ties=3), row("bvh", "sponza", 5000000),
+                row("kdtree", "needles", 4000000, wrong=1), row("bvh", "watertight_sphere", 1000, check="stress")]
+        text = page.page([a], {"native": "native/charts"}, rows)
+        section = text[text.index("## Ten million rays per structure"):]
+        section = section[:section.index("\n## ", 3)]
+        self.assertIn("| `bvh` | 11,001,000 (11,000,000 + 1,000) | 2 | 0 | 0 | 3 | 0 | 0 (100) |", section)
+        self.assertIn("| `kdtree` | 4,000,000 (4,000,000 + 0) | 1 | 1 | 0 | 0 | 0 | 0 (0) |", section)
+        self.assertIn("Long check: AMD EPYC (2 hardware threads), kernels AVX2, Embree 3.13.5 AVX2, g++ 12.2.0, "
+                      "revision abc1234, 2026-12-08", section)
+        self.assertNotIn("## Ten million rays", page.page([a], {"native": "native/charts"}))
+
 
 if __name__ == "__main__":
     unittest.main()
