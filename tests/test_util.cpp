@@ -5,6 +5,8 @@
 #include <array>
 #include <cstdio>
 
+#include <fmt/format.h>
+
 namespace raylab::test {
 
 CommandResult run_shell(const std::string& cmd) {
@@ -19,7 +21,7 @@ CommandResult run_shell(const std::string& cmd) {
   return r;
 }
 
-CommandResult run_raylab(const std::string& args) { return run_shell(std::string(RAYLAB_BINARY) + " " + args + " 2>&1"); }
+CommandResult run_raylab(const std::string& args) { return run_shell(fmt::format("{} {} 2>&1", RAYLAB_BINARY, args)); }
 
 CommandResult run_raylab_in(const std::filesystem::path& dir, const std::string& args) {
   return run_shell("cd '" + dir.string() + "' && " + std::string(RAYLAB_BINARY) + " " + args + " 2>&1");

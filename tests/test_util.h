@@ -11,7 +11,9 @@
 namespace raylab::test {
 
 inline std::string shared_dir() { return RAYLAB_SHARED_DIR; }
-inline bool have_shared_scenes() { return std::filesystem::exists(shared_dir() + "/scenes/MANIFEST.tsv"); }
+// Paths joined by std::filesystem, not by std::string's operator+, whose inlined copies
+// GCC 12 flags with false -Warray-bounds / -Wrestrict warnings.
+inline bool have_shared_scenes() { return std::filesystem::exists(std::filesystem::path(shared_dir()) / "scenes" / "MANIFEST.tsv"); }
 
 // A fresh empty directory under the system temp dir.
 inline std::filesystem::path temp_dir(const std::string& name) {
