@@ -156,6 +156,29 @@ struct Candidate {
 
 }  // namespace
 
+bool oracle_triangle_is_exactly_degenerate(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
+  // Differences of floats in double, exact when their rounding error is zero
+  // (Knuth's two-sum), then the cross product's products, exact when fma
+  // finds no remainder: collinear iff the two products of every component
+  // are equal.
+  double e[2][3];
+  const Vec3f* q[2] = {&p1, &p2};
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double x = (*q[k])[a], y = -static_cast<double>(p0[a]);
+      const double s = x + y, bv = s - x, err = (x - (s - bv)) + (y - bv);
+      if (err != 0.0) return false;
+      e[k][a] = s;
+    }
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    const double l = e[0][b] * e[1][c], r = e[0][c] * e[1][b];
+    if (std::fma(e[0][b], e[1][c], -l) != 0.0 || std::fma(e[0][c], e[1][b], -r) != 0.0) return false;
+    if (l != r) return false;
+  }
+  return true;
+}
+
 OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray) {
   OracleTriangle out;
   out.exact_used = true;
@@ -263,7 +286,11 @@ OracleAccumulator::~OracleAccumulator() = default;
 
 bool OracleAccumulator::grazing() const { return state_->best.grazing; }
 
-void OracleAccumulator::add(uint32_t i) {
+void OracleAccumulator::add(uint32_t i) { add_triangle(i, false); }
+
+void OracleAccumulator::add_degenerate(uint32_t i) { add_triangle(i, true); }
+
+void OracleAccumulator::add_triangle(uint32_t i, bool never_crosses) {
   State& st = *state_;
   const TriangleMesh& mesh = st.mesh;
   const Ray& ray = st.ray;
@@ -289,7 +316,7 @@ void OracleAccumulator::add(uint32_t i) {
       (std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
     best.grazing = true;
 
-  if (d.certain_miss) return;
+  if (d.certain_miss || never_crosses) return;
   Candidate c{i, d.t, d.err_t, std::nullopt};
   bool crosses;
   std::optional<bool> in = d.uncertain ? std::nullopt : double_in_range(d.t, d.err_t, ray);

@@ -60,11 +60,18 @@ class OracleAccumulator {
   // Tests one triangle (each at most once): a crossing becomes a candidate,
   // and `grazing`, `robust_hit` and `exact_used` are updated.
   void add(uint32_t prim);
+  // The same for a triangle whose float vertices are exactly collinear
+  // (oracle_triangle_is_exactly_degenerate): it is never crossed (its
+  // determinant is exactly zero), so only `grazing` can change, and no
+  // exact arithmetic is needed.
+  void add_degenerate(uint32_t prim);
   bool grazing() const;
   // The answer over the triangles added.
   OracleHit finish();
 
  private:
+  void add_triangle(uint32_t prim, bool never_crosses);
+
   struct State;
   std::unique_ptr<State> state_;
   bool ray_valid_ = false;
@@ -79,6 +86,12 @@ struct OracleTriangle {
   bool exact_used = false;
 };
 OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_t prim);
+
+// True when the triangle's float vertices are provably collinear (or
+// repeated): the edge vectors and their cross product's terms are computed
+// in double and checked to be exact, so "true" is certain; false when not
+// collinear or when that could not be shown this way.
+bool oracle_triangle_is_exactly_degenerate(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2);
 
 // Exact decision alone (always GMP), for tests and for the leak test.
 OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray);

@@ -191,7 +191,8 @@ OracleIndex::OracleIndex(const TriangleMesh& mesh) : triangles_(mesh.num_triangl
   keys.reserve(count);
   for (size_t i = 0; i < n; ++i) {
     if (!bounded[i]) {
-      unbounded_.push_back(static_cast<uint32_t>(i));
+      const bool never_crossed = oracle_triangle_is_exactly_degenerate(mesh.vertex(i, 0), mesh.vertex(i, 1), mesh.vertex(i, 2));
+      (never_crossed ? degenerate_ : unbounded_).push_back(static_cast<uint32_t>(i));
       continue;
     }
     SortKey k;
@@ -209,7 +210,8 @@ OracleIndex::OracleIndex(const TriangleMesh& mesh) : triangles_(mesh.num_triangl
 }
 
 size_t OracleIndex::memory_bytes() const {
-  return nodes_.capacity() * sizeof(OracleIndexNode) + (ids_.capacity() + unbounded_.capacity()) * sizeof(uint32_t);
+  return nodes_.capacity() * sizeof(OracleIndexNode) +
+         (ids_.capacity() + unbounded_.capacity() + degenerate_.capacity()) * sizeof(uint32_t);
 }
 
 namespace {
@@ -343,7 +345,8 @@ OracleHit oracle_closest_hit(const OracleIndex& index, const TriangleMesh& mesh,
   if (!acc.ray_valid()) return OracleHit{};
   OracleIndexStats local;
   for (uint32_t id : index.unbounded()) acc.add(id);
-  local.triangles_tested += index.unbounded().size();
+  for (uint32_t id : index.degenerate()) acc.add_degenerate(id);
+  local.triangles_tested += index.unbounded().size() + index.degenerate().size();
   const auto& nodes = index.nodes();
   const auto& ids = index.ids();
   if (!nodes.empty()) {

@@ -65,7 +65,11 @@
 // boxes padded by 1e-6 relative. Triangles without a reliable normal
 // (smallest altitude below 1e-4 of the longest edge, which includes the
 // degenerate ones, whose computed t is noise) are not in the tree: they are
-// tested on every ray, like the brute loop does.
+// tested on every ray, like the brute loop does; for those whose vertices are
+// exactly collinear only the grazing conditions are evaluated (they cannot be
+// crossed), without exact arithmetic. A scene far from the origin whose
+// vertices collapse on the float grid (terrain:n=7072 translated by 1e5) is
+// mostly such triangles, and then every call still tests them all.
 //
 // Memory: 48-byte nodes (float box, float cone axis and sine, altitude, one
 // index) over leaves of up to 16 triangles (N/6 to N/10 nodes, 5 to 10 bytes
@@ -99,8 +103,10 @@ class OracleIndex {
 
   const std::vector<OracleIndexNode>& nodes() const { return nodes_; }
   const std::vector<uint32_t>& ids() const { return ids_; }
-  // Triangles without a reliable normal, tested on every ray.
+  // Triangles without a reliable normal, tested on every ray; those of them
+  // that are exactly degenerate (never crossed: only grazing is tested).
   const std::vector<uint32_t>& unbounded() const { return unbounded_; }
+  const std::vector<uint32_t>& degenerate() const { return degenerate_; }
   size_t num_triangles() const { return triangles_; }
   size_t memory_bytes() const;
 
@@ -119,6 +125,7 @@ class OracleIndex {
   std::vector<OracleIndexNode> nodes_;
   std::vector<uint32_t> ids_;
   std::vector<uint32_t> unbounded_;
+  std::vector<uint32_t> degenerate_;
   size_t triangles_ = 0;
 };
 

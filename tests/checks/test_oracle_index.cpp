@@ -224,10 +224,29 @@ TEST(OracleIndex, DegenerateTrianglesAreTestedOnEveryRay) {
     m.triangles.push_back({base, base + 1, base + 3});
   }
   const OracleIndex index(m);
-  EXPECT_GE(index.unbounded().size(), 600u);
-  EXPECT_EQ(index.ids().size() + index.unbounded().size(), m.num_triangles());
+  EXPECT_GE(index.unbounded().size() + index.degenerate().size(), 600u);
+  EXPECT_GE(index.degenerate().size(), 200u);  // at least the repeated vertices
+  EXPECT_EQ(index.ids().size() + index.unbounded().size() + index.degenerate().size(), m.num_triangles());
+  // Exactly collinear: repeated vertices and points on an axis-aligned line.
+  EXPECT_TRUE(oracle_triangle_is_exactly_degenerate(Vec3f(1, 2, 3), Vec3f(1, 2, 3), Vec3f(4, 5, 6)));
+  EXPECT_TRUE(oracle_triangle_is_exactly_degenerate(Vec3f(0.5f, 1, 3), Vec3f(0.5f, 1, 7), Vec3f(0.5f, 1, -2)));
+  EXPECT_TRUE(oracle_triangle_is_exactly_degenerate(Vec3f(1e5f, 1e5f, 1e5f), Vec3f(1e5f + 0.0078125f, 1e5f, 1e5f),
+                                                    Vec3f(1e5f + 0.015625f, 1e5f, 1e5f)));
+  EXPECT_FALSE(oracle_triangle_is_exactly_degenerate(Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1e-30f, 0)));
   std::vector<Ray> rays = corner_case_rays(m, 4000, 31);
   expect_identical("degenerate triangles", m, rays);
+}
+
+// A terrain moved far from the origin: its vertices collapse on the float
+// grid (spacing 1/16 at 1e6, twice the cell), so most triangles are exactly
+// degenerate.
+TEST(OracleIndex, SameAnswerOnACollapsedFarTerrain) {
+  Scene s = load_scene("terrain:n=60");
+  for (Vec3f& v : s.mesh.vertices) v += Vec3f(1e6f, 1e6f, 1e6f);
+  const OracleIndex index(s.mesh);
+  EXPECT_GT(index.degenerate().size(), s.mesh.num_triangles() / 3);
+  // Few rays: the loop over every triangle decides each degenerate one exactly.
+  expect_identical("terrain at 1e6", s.mesh, corner_case_rays(s.mesh, 250, 37));
 }
 
 // The point of the index: on a larger scene a call tests a small share of
