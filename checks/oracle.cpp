@@ -156,6 +156,29 @@ struct Candidate {
 
 }  // namespace
 
+bool oracle_triangle_is_exactly_degenerate(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
+  // Differences of floats in double, exact when their rounding error is zero
+  // (Knuth's two-sum), then the cross product's products, exact when fma
+  // finds no remainder: collinear iff the two products of every component
+  // are equal.
+  double e[2][3];
+  const Vec3f* q[2] = {&p1, &p2};
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double x = (*q[k])[a], y = -static_cast<double>(p0[a]);
+      const double s = x + y, bv = s - x, err = (x - (s - bv)) + (y - bv);
+      if (err != 0.0) return false;
+      e[k][a] = s;
+    }
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    const double l = e[0][b] * e[1][c], r = e[0][c] * e[1][b];
+    if (std::fma(e[0][b], e[1][c], -l) != 0.0 || std::fma(e[0][c], e[1][b], -r) != 0.0) return false;
+    if (l != r) return false;
+  }
+  return true;
+}
+
 OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray) {
   OracleTriangle out;
   out.exact_used = true;
@@ -244,60 +267,87 @@ size_t nearest_candidate(const TriangleMesh& mesh, const Ray& ray, std::vector<C
 
 }  // namespace
 
-OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol) {
+struct OracleAccumulator::State {
+  const TriangleMesh& mesh;
+  const Ray ray;
+  const double graze_tol;
+  const RayD rd;
+  const double tmin, tmax;
   OracleHit best;
-  if (!ray_is_valid(ray)) return best;
-  const RayD rd(ray);
-  const double tmin = ray.tmin, tmax = effective_tmax(ray);
   std::vector<Candidate> cands;
+  State(const TriangleMesh& m, const Ray& r, double tol)
+      : mesh(m), ray(r), graze_tol(tol), rd(r), tmin(r.tmin), tmax(effective_tmax(r)) {}
+};
 
-  for (size_t i = 0; i < mesh.num_triangles(); ++i) {
-    const Vec3f &p0 = mesh.vertex(i, 0), &p1 = mesh.vertex(i, 1), &p2 = mesh.vertex(i, 2);
-    const DoubleEval d = double_eval(rd, p0, p1, p2);
-    const double t_slack = t_slack_for(graze_tol, d.t, rd, p0, p1, p2);
-    const bool near_range = d.t >= tmin - t_slack && d.t <= tmax + t_slack;
-    // Grazing: within graze_tol of an edge, or of tmin/tmax, or in the plane.
-    if (std::fabs(d.det) <= d.err_det) {
-      const bool all_small = std::fabs(d.u) <= d.err_edge[0] * 1e3 && std::fabs(d.v) <= d.err_edge[1] * 1e3 &&
-                             std::fabs(d.w) <= d.err_edge[2] * 1e3;
-      if (all_small) {
-        // Lying in (or within rounding of) the plane: grazing if the segment
-        // comes near the triangle's bounds.
-        if (segment_near_box(rd, tmin, tmax, mesh.triangle_bounds(i))) best.grazing = true;
-      }
-    }
-    if (std::isfinite(d.t) && near_range && std::fabs(d.margin) < graze_tol) best.grazing = true;
-    if (std::isfinite(d.t) && near_range && d.margin >= -graze_tol &&
-        (std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
-      best.grazing = true;
+OracleAccumulator::OracleAccumulator(const TriangleMesh& mesh, const Ray& ray, double graze_tol)
+    : state_(std::make_unique<State>(mesh, ray, graze_tol)), ray_valid_(ray_is_valid(ray)) {}
 
-    if (d.certain_miss) continue;
-    Candidate c{static_cast<uint32_t>(i), d.t, d.err_t, std::nullopt};
-    bool crosses;
-    std::optional<bool> in = d.uncertain ? std::nullopt : double_in_range(d.t, d.err_t, ray);
-    if (in) {
-      crosses = *in;
-    } else {
-      best.exact_used = true;
-      const ExactEval e = exact_eval(p0, p1, p2, ray);
-      crosses = e.crosses_line && exact_in_range(e.t, ray);
-      if (crosses) {
-        c.exact_t = e.t;
-        c.t = e.t.get_d();
-        c.err = 0.0;
-      }
+OracleAccumulator::~OracleAccumulator() = default;
+
+bool OracleAccumulator::grazing() const { return state_->best.grazing; }
+
+void OracleAccumulator::add(uint32_t i) { add_triangle(i, false); }
+
+void OracleAccumulator::add_degenerate(uint32_t i) { add_triangle(i, true); }
+
+void OracleAccumulator::add_triangle(uint32_t i, bool never_crosses) {
+  State& st = *state_;
+  const TriangleMesh& mesh = st.mesh;
+  const Ray& ray = st.ray;
+  const RayD& rd = st.rd;
+  const double graze_tol = st.graze_tol, tmin = st.tmin, tmax = st.tmax;
+  OracleHit& best = st.best;
+  const Vec3f &p0 = mesh.vertex(i, 0), &p1 = mesh.vertex(i, 1), &p2 = mesh.vertex(i, 2);
+  const DoubleEval d = double_eval(rd, p0, p1, p2);
+  const double t_slack = t_slack_for(graze_tol, d.t, rd, p0, p1, p2);
+  const bool near_range = d.t >= tmin - t_slack && d.t <= tmax + t_slack;
+  // Grazing: within graze_tol of an edge, or of tmin/tmax, or in the plane.
+  if (std::fabs(d.det) <= d.err_det) {
+    const bool all_small = std::fabs(d.u) <= d.err_edge[0] * 1e3 && std::fabs(d.v) <= d.err_edge[1] * 1e3 &&
+                           std::fabs(d.w) <= d.err_edge[2] * 1e3;
+    if (all_small) {
+      // Lying in (or within rounding of) the plane: grazing if the segment
+      // comes near the triangle's bounds.
+      if (segment_near_box(rd, tmin, tmax, mesh.triangle_bounds(i))) best.grazing = true;
     }
-    if (!crosses) continue;
-    if (d.margin >= graze_tol && !(std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
-      best.robust_hit = true;
-    cands.push_back(std::move(c));
   }
-  if (cands.empty()) return best;
+  if (std::isfinite(d.t) && near_range && std::fabs(d.margin) < graze_tol) best.grazing = true;
+  if (std::isfinite(d.t) && near_range && d.margin >= -graze_tol &&
+      (std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
+    best.grazing = true;
 
-  const size_t bi = nearest_candidate(mesh, ray, cands, best);
+  if (d.certain_miss || never_crosses) return;
+  Candidate c{i, d.t, d.err_t, std::nullopt};
+  bool crosses;
+  std::optional<bool> in = d.uncertain ? std::nullopt : double_in_range(d.t, d.err_t, ray);
+  if (in) {
+    crosses = *in;
+  } else {
+    best.exact_used = true;
+    const ExactEval e = exact_eval(p0, p1, p2, ray);
+    crosses = e.crosses_line && exact_in_range(e.t, ray);
+    if (crosses) {
+      c.exact_t = e.t;
+      c.t = e.t.get_d();
+      c.err = 0.0;
+    }
+  }
+  if (!crosses) return;
+  if (d.margin >= graze_tol && !(std::fabs(d.t - tmin) < t_slack || std::fabs(d.t - tmax) < t_slack))
+    best.robust_hit = true;
+  st.cands.push_back(std::move(c));
+}
+
+OracleHit OracleAccumulator::finish() {
+  State& st = *state_;
+  OracleHit best = st.best;
+  if (!ray_valid_ || st.cands.empty()) return best;
+  // In id order, as the loop over every triangle finds them.
+  std::sort(st.cands.begin(), st.cands.end(), [](const Candidate& a, const Candidate& b) { return a.prim < b.prim; });
+  const size_t bi = nearest_candidate(st.mesh, st.ray, st.cands, best);
   best.valid = true;
-  best.t = cands[bi].t;
-  best.prim = cands[bi].prim;
+  best.t = st.cands[bi].t;
+  best.prim = st.cands[bi].prim;
   return best;
 }
 
@@ -353,6 +403,13 @@ double watertight_distance_error(const Vec3f& p0, const Vec3f& p1, const Vec3f& 
   // with sz, the reciprocal of det and the final product.
   const double rel = eT / std::fabs(T) + edet / std::fabs(det) + 4.0 * u;
   return 2.0 * std::fabs(t) * rel;
+}
+
+OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol) {
+  OracleAccumulator acc(mesh, ray, graze_tol);
+  if (!acc.ray_valid()) return OracleHit{};
+  for (size_t i = 0; i < mesh.num_triangles(); ++i) acc.add(static_cast<uint32_t>(i));
+  return acc.finish();
 }
 
 bool same_distance(double a, double b, double tol) {

@@ -23,6 +23,7 @@
 // tmax, or the ray passes that close to a triangle it does not cross, or lies
 // in a triangle's plane.
 #include <cstdint>
+#include <memory>
 
 #include "base/hit.h"
 #include "base/ray.h"
@@ -42,6 +43,40 @@ struct OracleHit {
 
 OracleHit oracle_closest_hit(const TriangleMesh& mesh, const Ray& ray, double graze_tol = 1e-5);
 
+// The oracle's answer built one triangle at a time: oracle_closest_hit adds
+// every triangle, a culled search (checks/oracle_index.h) only those that can
+// matter. The answer does not depend on the order in which triangles are
+// added (the crossings are ordered by id before the nearest is chosen), so it
+// is the same for any set of triangles that holds every crossing and, unless
+// `grazing` is already set, every triangle that can set it.
+class OracleAccumulator {
+ public:
+  OracleAccumulator(const TriangleMesh& mesh, const Ray& ray, double graze_tol);
+  ~OracleAccumulator();
+  OracleAccumulator(const OracleAccumulator&) = delete;
+  OracleAccumulator& operator=(const OracleAccumulator&) = delete;
+
+  bool ray_valid() const { return ray_valid_; }
+  // Tests one triangle (each at most once): a crossing becomes a candidate,
+  // and `grazing`, `robust_hit` and `exact_used` are updated.
+  void add(uint32_t prim);
+  // The same for a triangle whose float vertices are exactly collinear
+  // (oracle_triangle_is_exactly_degenerate): it is never crossed (its
+  // determinant is exactly zero), so only `grazing` can change, and no
+  // exact arithmetic is needed.
+  void add_degenerate(uint32_t prim);
+  bool grazing() const;
+  // The answer over the triangles added.
+  OracleHit finish();
+
+ private:
+  void add_triangle(uint32_t prim, bool never_crosses);
+
+  struct State;
+  std::unique_ptr<State> state_;
+  bool ray_valid_ = false;
+};
+
 // One triangle against one ray, decided as by oracle_closest_hit.
 struct OracleTriangle {
   bool crosses = false;  // crosses the closed triangle with t in [tmin, tmax] (exact)
@@ -51,6 +86,12 @@ struct OracleTriangle {
   bool exact_used = false;
 };
 OracleTriangle oracle_triangle(const TriangleMesh& mesh, const Ray& ray, uint32_t prim);
+
+// True when the triangle's float vertices are provably collinear (or
+// repeated): the edge vectors and their cross product's terms are computed
+// in double and checked to be exact, so "true" is certain; false when not
+// collinear or when that could not be shown this way.
+bool oracle_triangle_is_exactly_degenerate(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2);
 
 // Exact decision alone (always GMP), for tests and for the leak test.
 OracleTriangle oracle_triangle_exact(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Ray& ray);

@@ -19,6 +19,7 @@
 #include "checks/classify.h"
 #include "checks/oracle.h"
 #include "checks/process_memory.h"
+#include "checks/scene_oracle.h"
 #include "tracer/trace.h"
 
 namespace raylab {
@@ -31,7 +32,7 @@ namespace {
 class TruthCache {
  public:
   TruthCache(const TriangleMesh& mesh, const std::vector<Ray>& rays)
-      : mesh_(mesh), rays_(rays), truth_(rays.size()), known_(rays.size(), 0) {}
+      : oracle_(mesh), rays_(rays), truth_(rays.size()), known_(rays.size(), 0) {}
 
   // Computes the missing answers for `ids` in parallel (call outside parallel loops over the same ids).
   // Once `stop` is set nothing more is computed or marked known.
@@ -41,11 +42,12 @@ class TruthCache {
       if (!known_[i]) todo.push_back(i);
     auto stopped = [&] { return stop && stop->load(); };
     // The stop flag is polled before every ray: on a large scene one oracle
-    // call tests every triangle (exactly where double precision cannot decide).
+    // call can still test many triangles (exactly where double precision
+    // cannot decide).
     tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         if (stopped()) return;
-        truth_[todo[k]] = oracle_closest_hit(mesh_, rays_[todo[k]]);
+        truth_[todo[k]] = oracle_.closest_hit(rays_[todo[k]]);
       }
     });
     if (stopped()) return;
@@ -54,7 +56,7 @@ class TruthCache {
   const OracleHit& operator[](uint32_t i) const { return truth_[i]; }
 
  private:
-  const TriangleMesh& mesh_;
+  SceneOracle oracle_;
   const std::vector<Ray>& rays_;
   std::vector<OracleHit> truth_;
   std::vector<uint8_t> known_;

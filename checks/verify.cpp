@@ -13,6 +13,7 @@
 #include "base/spec.h"
 #include "checks/classify.h"
 #include "checks/oracle.h"
+#include "checks/scene_oracle.h"
 #include "tracer/trace.h"
 
 namespace raylab {
@@ -57,9 +58,9 @@ JudgedRay judged_ray(size_t i, const Hit& got, const Hit& ref, const OracleHit& 
 // Compares closest hits (and the accelerator's own any-hit answers). Ties
 // screened by distance go to the oracle too when `judge_ties` is set.
 // `stop` is polled per block: the oracle can take long on many disagreements.
-Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<Hit>& ref, const std::vector<Hit>& got,
-                       const std::vector<uint8_t>& got_occ, double tol, bool judge_ties, size_t keep,
-                       const std::atomic<bool>* stop) {
+Counts compare_closest(const Scene& scene, const SceneOracle& oracle, const RaySet& set, const std::vector<Hit>& ref,
+                       const std::vector<Hit>& got, const std::vector<uint8_t>& got_occ, double tol, bool judge_ties,
+                       size_t keep, const std::atomic<bool>* stop) {
   Counts init;
   init.keep = keep;
   return tbb::parallel_reduce(
@@ -78,7 +79,7 @@ Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<
             c.d.ties++;
             continue;
           }
-          const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
+          const OracleHit o = oracle.closest_hit(set.rays[i]);
           const Disagreement d = classify_disagreement(scene.mesh, set.rays[i], a, e, o, tol);
           c.d.add(d);
           c.note(judged_ray(i, a, e, o, d));
@@ -89,7 +90,7 @@ Counts compare_closest(const Scene& scene, const RaySet& set, const std::vector<
 }
 
 // Compares occlusion answers.
-Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vector<uint8_t>& ref,
+Counts compare_occlusion(const SceneOracle& oracle, const RaySet& set, const std::vector<uint8_t>& ref,
                          const std::vector<uint8_t>& got, size_t keep, const std::atomic<bool>* stop) {
   Counts init;
   init.keep = keep;
@@ -99,7 +100,7 @@ Counts compare_occlusion(const Scene& scene, const RaySet& set, const std::vecto
         if (stop && stop->load()) return c;
         for (size_t i = r.begin(); i < r.end(); ++i) {
           if (ref[i] == got[i]) continue;
-          const OracleHit o = oracle_closest_hit(scene.mesh, set.rays[i]);
+          const OracleHit o = oracle.closest_hit(set.rays[i]);
           const Disagreement d = classify_occlusion_disagreement(set.rays[i], got[i] != 0, ref[i] != 0, o);
           c.d.add(d);
           Hit g, e;  // occlusion answers: a hit at t = 0 stands for "occluded"
@@ -183,6 +184,7 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
   std::vector<VerifyRecord> records;
   auto stopped = [&] { return opt.stop && opt.stop->load(); };
   const size_t total = accel_specs.size() * sets.size();
+  const SceneOracle oracle(scene.mesh);  // its index, if any, is built for the first disagreement
   for (const auto& spec : accel_specs) {
     if (stopped()) break;
     auto skip = [&](const std::string& reason) {
@@ -227,7 +229,7 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
       if (set.occlusion) {
         TraceOutput out;
         trace_set(*accel, set, threads, out, nullptr, nullptr, opt.stop);
-        arena.execute([&] { c = compare_occlusion(scene, set, ref_out[s].occluded, out.occluded, opt.judged_kept, opt.stop); });
+        arena.execute([&] { c = compare_occlusion(oracle, set, ref_out[s].occluded, out.occluded, opt.judged_kept, opt.stop); });
       } else {
         // The closest hits, then the same rays as an occlusion query (the
         // set's flag flipped for it rather than a copy of its rays).
@@ -237,7 +239,7 @@ std::vector<VerifyRecord> verify_accelerators(const Scene& scene, const std::vec
         trace_set(*accel, set, threads, occ, nullptr, nullptr, opt.stop);
         set.occlusion = false;
         arena.execute([&] {
-          c = compare_closest(scene, set, ref_out[s].hits, out.hits, occ.occluded, kTieTolerance, opt.judge_ties,
+          c = compare_closest(scene, oracle, set, ref_out[s].hits, out.hits, occ.occluded, kTieTolerance, opt.judge_ties,
                               opt.judged_kept, opt.stop);
         });
       }
