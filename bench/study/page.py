@@ -221,13 +221,17 @@ def section_long_check(rows):
     if not rows:
         return None
     import long_check_summary as lcs
+    table = lcs.per_structure(rows)
+    rays = [t["verify_rays"] + t["stress_rays"] for t in table.values()]
+    scenes = sorted({r["scene"] for r in rows if r["check"] == "verify"})
+    done = "" if min(rays) >= 10_000_000 else " (a run in progress: the goal is 10^7 rays per structure)"
     return ("## Ten million rays per structure: the long check\n\nEvery registered structure's default and its "
-            "scalar variant judged by the exact oracle on more than 10^7 rays each (`raylab verify --judge-ties`: "
-            "camera, diffuse, shadow and random rays over the interior views, the Cornell box 1e5 and 1e7 from the "
-            "origin, the needles and two scanned meshes; `raylab stress` for leaks), from `docs/correctness.csv`. "
+            f"scalar variant judged by the exact oracle on {min(rays):,} to {max(rays):,} rays each{done} "
+            f"(`raylab verify --judge-ties` with camera, diffuse, shadow and random rays on {len(scenes)} scenes: "
+            f"{', '.join(scenes)}; `raylab stress` for leaks), from `docs/correctness.csv`. "
             "`raylab wrong` and `Embree wrong` are the oracle's verdicts on every disagreement; `ties` are "
             "disagreements where float arithmetic may answer either way (docs/method.md).\n\n"
-            + lcs.markdown(lcs.per_structure(rows)) + "\n" + lcs.provenance(rows))
+            + lcs.markdown(table) + "\n" + lcs.provenance(rows))
 
 
 def common_cell_means(runs):

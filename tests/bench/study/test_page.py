@@ -67,6 +67,8 @@ class PageTest(unittest.TestCase):
         self.assertIn("| `kdtree` | 4,000,000 (4,000,000 + 0) | 1 | 1 | 0 | 0 | 0 | 0 (0) |", section)
         self.assertIn("Long check: AMD EPYC (2 hardware threads), kernels AVX2, Embree 3.13.5 AVX2, g++ 12.2.0, "
                       "revision abc1234, 2026-12-08", section)
+        self.assertIn("on 4,000,000 to 11,001,000 rays each (a run in progress", section)
+        self.assertIn("on 2 scenes: needles, sponza;", section)
         self.assertNotIn("## Ten million rays", page.page([a], {"native": "native/charts"}))
 
 
